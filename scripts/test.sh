@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# Runs the whole test suite (lint, core gtests, rostests) through ctest; exits non-zero on failure.
+set -euo pipefail
+source "$(dirname "$0")/env.sh"
+
+say "lint: catkin_lint and clang-format"
+"$GEOFUSION_SRC/scripts/lint.sh"
+
+set +u
+source "$GEOFUSION_WS/devel/setup.bash"
+set -u
+cd "$GEOFUSION_WS/build"
+say "ctest: core unit tests (gtest, no ROS master) and rostests (replayed bags)"
+ctest --output-on-failure

@@ -1,0 +1,21 @@
+// Nodelet entry points: each only constructs the node class from the nodelet's handles.
+#include "geofusion/ros/detection_viewer.h"
+
+#include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
+
+#include <memory>
+
+namespace geofusion {
+
+class DetectionViewerNodelet : public nodelet::Nodelet {
+ private:
+  void onInit() override {
+    viewer_ = std::make_unique<DetectionViewer>(getNodeHandle(), getPrivateNodeHandle());
+  }
+  std::unique_ptr<DetectionViewer> viewer_;
+};
+
+}  // namespace geofusion
+
+PLUGINLIB_EXPORT_CLASS(geofusion::DetectionViewerNodelet, nodelet::Nodelet)

@@ -1,0 +1,286 @@
+// geofusion_make_synthetic_bag: writes a small, self-contained recording of the analytic demo
+// scene with the topics and frames of a Fetch robot (REP-103/105), and a ground-truth YAML beside
+// it. Used by `make demo` and by the rostests; no model files needed.
+//
+//   geofusion_make_synthetic_bag --out demo.bag [--ground-truth demo_gt.yaml] [--frames 60]
+//       [--rate 10] [--seed 1] [--malformed-every 0] [--tf-until -1]
+//       [--depth-encoding 32FC1|16UC1] [--detection-stamp-offset 0]
+#include "geofusion/core/box_scene.h"
+#include "geofusion/core/frame_by_frame.h"
+#include "geofusion/ros/conversions.h"
+
+#include <geofusion/DetectionArray.h>
+#include <nav_msgs/Odometry.h>
+#include <rosbag/bag.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/image_encodings.h>
+#include <tf2_eigen/tf2_eigen.h>
+#include <tf2_msgs/TFMessage.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <random>
+#include <stdexcept>
+#include <string>
+
+namespace {
+
+struct Options {
+  std::string out;
+  std::string ground_truth;
+  int frames = 60;
+  double rate_hz = 10.0;
+  unsigned seed = 1;
+  int malformed_every = 0;
+  int tf_until = -1;
+  std::string depth_encoding = "32FC1";
+  double detection_stamp_offset_s = 0.0;
+};
+
+void usage() {
+  std::cerr << "usage: geofusion_make_synthetic_bag --out FILE.bag [--ground-truth FILE.yaml]\n"
+               "         [--frames N=60] [--rate HZ=10] [--seed S=1] [--malformed-every K=0]\n"
+               "         [--tf-until FRAME=-1] [--depth-encoding 32FC1|16UC1]\n"
+               "         [--detection-stamp-offset SECONDS=0]\n";
+}
+
+Options parse(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() -> std::string {
+      if (i + 1 >= argc) throw std::runtime_error("missing value after " + a);
+      return argv[++i];
+    };
+    if (a == "--out") o.out = next();
+    else if (a == "--ground-truth") o.ground_truth = next();
+    else if (a == "--frames") o.frames = std::stoi(next());
+    else if (a == "--rate") o.rate_hz = std::stod(next());
+    else if (a == "--seed") o.seed = static_cast<unsigned>(std::stoul(next()));
+    else if (a == "--malformed-every") o.malformed_every = std::stoi(next());
+    else if (a == "--tf-until") o.tf_until = std::stoi(next());
+    else if (a == "--depth-encoding") o.depth_encoding = next();
+    else if (a == "--detection-stamp-offset") o.detection_stamp_offset_s = std::stod(next());
+    else if (a == "-h" || a == "--help") { usage(); std::exit(0); }
+    else throw std::runtime_error("unknown option " + a);
+  }
+  if (o.out.empty()) throw std::runtime_error("--out is required");
+  if (o.frames < 1 || o.rate_hz <= 0) throw std::runtime_error("--frames and --rate must be > 0");
+  if (o.depth_encoding != "32FC1" && o.depth_encoding != "16UC1") {
+    throw std::runtime_error("--depth-encoding must be 32FC1 or 16UC1");
+  }
+  if (o.ground_truth.empty()) {
+    const auto dot = o.out.rfind(".bag");
+    o.ground_truth = (dot == std::string::npos ? o.out : o.out.substr(0, dot)) + "_gt.yaml";
+  }
+  return o;
+}
+
+geometry_msgs::TransformStamped transform(const Eigen::Isometry3d& T, const ros::Time& stamp,
+                                          const std::string& parent, const std::string& child) {
+  geometry_msgs::TransformStamped t = tf2::eigenToTransform(T);
+  t.header.stamp = stamp;
+  t.header.frame_id = parent;
+  t.child_frame_id = child;
+  return t;
+}
+
+std::string vec(const Eigen::Vector3d& v) {
+  char b[96];
+  std::snprintf(b, sizeof(b), "[%.6f, %.6f, %.6f]", v.x(), v.y(), v.z());
+  return b;
+}
+
+std::string quat(const Eigen::Matrix3d& R) {
+  const Eigen::Quaterniond q(R);
+  char b[128];
+  std::snprintf(b, sizeof(b), "[%.9f, %.9f, %.9f, %.9f]", q.x(), q.y(), q.z(), q.w());
+  return b;
+}
+
+// Detections the perception stack sometimes emits and the estimator must survive.
+std::vector<geofusion::RawDetection> malformed() {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  geofusion::RawDetection base;
+  base.class_name = "003_cracker_box";
+  base.class_id = 2;
+  base.score = 0.8;
+  base.position_cam = Eigen::Vector3d(0.0, 0.0, 1.0);
+  std::vector<geofusion::RawDetection> out(3, base);
+  out[0].position_cam.y() = nan;                               // NaN translation
+  out[1].orientation_cam = Eigen::Quaterniond(0, 0, 0, 0);     // zero quaternion
+  out[2].orientation_cam = Eigen::Quaterniond(0.9, 0.9, 0, 0); // non-unit quaternion
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options opt;
+  try {
+    opt = parse(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "geofusion_make_synthetic_bag: " << e.what() << "\n";
+    usage();
+    return 2;
+  }
+  using namespace geofusion;
+  const std::string odom = "odom", base = "base_link", cam_link = "head_camera_link",
+                    optical = "head_camera_rgb_optical_frame";
+  const BoxScene scene = BoxScene::demoScene();
+  const PinholeIntrinsics K;
+  std::mt19937 rng(opt.seed);
+  DetectionNoise noise;
+
+  // Fetch-like head: camera 1.35 m above the floor, tilted down towards the table.
+  Eigen::Isometry3d T_base_link = Eigen::Isometry3d::Identity();
+  T_base_link.translation() = Eigen::Vector3d(0.05, 0.0, 1.35);
+  T_base_link.linear() = Eigen::AngleAxisd(0.55, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  Eigen::Isometry3d T_link_optical = Eigen::Isometry3d::Identity();
+  T_link_optical.linear() = Eigen::Quaterniond(0.5, -0.5, 0.5, -0.5).toRotationMatrix();
+
+  rosbag::Bag bag;
+  try {
+    bag.open(opt.out, rosbag::bagmode::Write);
+  } catch (const std::exception& e) {
+    std::cerr << "geofusion_make_synthetic_bag: cannot write " << opt.out << ": " << e.what()
+              << "\n";
+    return 1;
+  }
+  std::ofstream gt(opt.ground_truth);
+  if (!gt) {
+    std::cerr << "geofusion_make_synthetic_bag: cannot write " << opt.ground_truth << "\n";
+    return 1;
+  }
+
+  const ros::Time t0(1600000000.0);
+  {
+    tf2_msgs::TFMessage statics;
+    statics.transforms.push_back(transform(T_base_link, t0, base, cam_link));
+    statics.transforms.push_back(transform(T_link_optical, t0, cam_link, optical));
+    bag.write("/tf_static", t0, statics);
+  }
+
+  gt << "# Ground truth of a geofusion_make_synthetic_bag recording. Poses: position [x, y, z] m,\n"
+        "# orientation [x, y, z, w]; world frame = odom (this recording has no drift).\n";
+  gt << "frame_id: " << odom << "\ncamera_frame: " << optical << "\n";
+  gt << "intrinsics: {width: " << K.width << ", height: " << K.height << ", fx: " << K.fx
+     << ", fy: " << K.fy << ", cx: " << K.cx << ", cy: " << K.cy << "}\n";
+  gt << "objects:\n";
+  for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+    const BoxObject& o = scene.objects[i];
+    gt << "  - {index: " << i << ", class_name: " << o.class_name << ", class_id: " << o.class_id
+       << ", size: " << vec(o.size) << ", position: " << vec(o.T_world_obj.translation())
+       << ", orientation: " << quat(o.T_world_obj.linear()) << "}\n";
+  }
+  gt << "frames:\n";
+
+  const FrameByFrame checker;  // to record which written detections are valid
+  const double radius = 1.0, arc = 1.8;
+  int total_detections = 0, total_malformed = 0;
+  for (int k = 0; k < opt.frames; ++k) {
+    const ros::Time stamp = t0 + ros::Duration(0.5 + k / opt.rate_hz);
+    const double s = opt.frames > 1 ? static_cast<double>(k) / (opt.frames - 1) : 0.0;
+    const double theta = M_PI - 0.5 * arc + arc * s;
+    Eigen::Isometry3d T_odom_base = Eigen::Isometry3d::Identity();
+    T_odom_base.translation() = Eigen::Vector3d(radius * std::cos(theta), radius * std::sin(theta), 0);
+    T_odom_base.linear() =
+        Eigen::AngleAxisd(theta + M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    const Eigen::Isometry3d T_odom_cam = T_odom_base * T_base_link * T_link_optical;
+
+    if (opt.tf_until < 0 || k <= opt.tf_until) {
+      tf2_msgs::TFMessage tf;
+      tf.transforms.push_back(transform(T_odom_base, stamp, odom, base));
+      bag.write("/tf", stamp, tf);
+    }
+    nav_msgs::Odometry odom_msg;
+    odom_msg.header.stamp = stamp;
+    odom_msg.header.frame_id = odom;
+    odom_msg.child_frame_id = base;
+    odom_msg.pose.pose = toPoseMsg(T_odom_base);
+    bag.write("/odom", stamp, odom_msg);
+
+    const RenderedFrame frame = scene.render(K, T_odom_cam);
+    sensor_msgs::Image rgb;
+    rgb.header.stamp = stamp;
+    rgb.header.frame_id = optical;
+    rgb.width = K.width;
+    rgb.height = K.height;
+    rgb.encoding = sensor_msgs::image_encodings::RGB8;
+    rgb.step = 3 * K.width;
+    rgb.data = frame.rgb;
+    bag.write("/head_camera/rgb/image_raw", stamp, rgb);
+
+    sensor_msgs::Image depth;
+    depth.header = rgb.header;
+    depth.width = K.width;
+    depth.height = K.height;
+    if (opt.depth_encoding == "32FC1") {
+      depth.encoding = sensor_msgs::image_encodings::TYPE_32FC1;
+      depth.step = 4 * K.width;
+      depth.data.resize(frame.depth.size() * 4);
+      std::memcpy(depth.data.data(), frame.depth.data(), depth.data.size());
+    } else {
+      depth.encoding = sensor_msgs::image_encodings::TYPE_16UC1;
+      depth.step = 2 * K.width;
+      std::vector<uint16_t> mm(frame.depth.size());
+      for (std::size_t i = 0; i < mm.size(); ++i) {
+        mm[i] = static_cast<uint16_t>(std::lround(std::min(frame.depth[i] * 1000.0, 65535.0)));
+      }
+      depth.data.resize(mm.size() * 2);
+      std::memcpy(depth.data.data(), mm.data(), depth.data.size());
+    }
+    bag.write("/head_camera/depth_registered/image_raw", stamp, depth);
+
+    sensor_msgs::CameraInfo info;
+    info.header = rgb.header;
+    info.width = K.width;
+    info.height = K.height;
+    info.distortion_model = "plumb_bob";
+    info.D.assign(5, 0.0);
+    info.K = {K.fx, 0, K.cx, 0, K.fy, K.cy, 0, 0, 1};
+    info.R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    info.P = {K.fx, 0, K.cx, 0, 0, K.fy, K.cy, 0, 0, 0, 1, 0};
+    bag.write("/head_camera/rgb/camera_info", stamp, info);
+    bag.write("/head_camera/depth_registered/camera_info", stamp, info);
+
+    std::vector<RawDetection> dets = synthesizeDetections(scene, frame, T_odom_cam, noise, rng);
+    const std::size_t num_valid = dets.size();
+    if (opt.malformed_every > 0 && k % opt.malformed_every == 0) {
+      for (const RawDetection& bad : malformed()) dets.push_back(bad);
+    }
+    geofusion::DetectionArray det_msg;
+    det_msg.header.stamp = stamp + ros::Duration(opt.detection_stamp_offset_s);
+    det_msg.header.frame_id = optical;
+    for (const RawDetection& d : dets) det_msg.detections.push_back(toMsg(d));
+    bag.write("/detections", stamp, det_msg);
+    total_detections += static_cast<int>(dets.size());
+    total_malformed += static_cast<int>(dets.size() - num_valid);
+
+    gt << "  - {index: " << k << ", stamp: " << std::fixed;
+    gt.precision(9);
+    gt << stamp.toSec() << ", camera_position: " << vec(T_odom_cam.translation())
+       << ", camera_orientation: " << quat(T_odom_cam.linear()) << ", tf: "
+       << ((opt.tf_until < 0 || k <= opt.tf_until) ? "true" : "false")
+       << ", malformed: " << (dets.size() - num_valid) << ", detections: [";
+    for (std::size_t i = 0; i < num_valid; ++i) {
+      ObjectMeasurement m;
+      SkipReason reason;
+      if (!checker.check(dets[i], &m, &reason)) continue;
+      gt << (i ? ", " : "") << "{class_name: " << dets[i].class_name
+         << ", world_position: " << vec(T_odom_cam * dets[i].position_cam) << "}";
+    }
+    gt << "]}\n";
+    gt.unsetf(std::ios::fixed);
+  }
+  bag.close();
+  std::cout << "geofusion_make_synthetic_bag: wrote " << opt.frames << " frames ("
+            << total_detections << " detections, " << total_malformed << " of them malformed) to "
+            << opt.out << "; ground truth in " << opt.ground_truth << std::endl;
+  return 0;
+}

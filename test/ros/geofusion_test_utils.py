@@ -1,0 +1,51 @@
+"""Helpers shared by the package's rostest checkers (imported, not run)."""
+import os
+import subprocess
+import tempfile
+import time
+
+import rosgraph
+import roslib.packages
+import yaml
+
+
+def find_tool(name):
+    paths = roslib.packages.find_node('geofusion', name)
+    if not paths:
+        raise RuntimeError('cannot find the geofusion executable %s (is the package built?)' % name)
+    return paths[0]
+
+
+def make_bag(name, *args):
+    """Writes a synthetic bag with geofusion_make_synthetic_bag; returns (bag, ground truth)."""
+    out_dir = tempfile.mkdtemp(prefix='geofusion_test_')
+    bag = os.path.join(out_dir, name + '.bag')
+    subprocess.check_call([find_tool('geofusion_make_synthetic_bag'), '--out', bag] +
+                          [str(a) for a in args])
+    with open(bag[:-4] + '_gt.yaml') as f:
+        gt = yaml.safe_load(f)
+    return bag, gt
+
+
+def wait_for_graph(subscribed_topics, published_topics, timeout_s=30.0):
+    """Waits (wall time) until every topic has a subscriber / publisher registered."""
+    master = rosgraph.Master('/geofusion_test')
+    deadline = time.time() + timeout_s
+    while time.time() < deadline:
+        pubs, subs, _ = master.getSystemState()
+        pub_topics = {t for t, _ in pubs}
+        sub_topics = {t for t, _ in subs}
+        if all(t in sub_topics for t in subscribed_topics) and \
+           all(t in pub_topics for t in published_topics):
+            return True
+        time.sleep(0.2)
+    return False
+
+
+def play(bag, rate=1.0):
+    """Plays a bag with --clock (the tests run with /use_sim_time) and waits for the end."""
+    subprocess.check_call(['rosbag', 'play', '--clock', '-q', '-d', '1', '-r', str(rate), bag])
+
+
+INPUT_TOPICS = ['/head_camera/rgb/image_raw', '/head_camera/depth_registered/image_raw',
+                '/head_camera/rgb/camera_info', '/detections']
