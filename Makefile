@@ -7,19 +7,19 @@ help:
 	@sed -n '2,4p' Makefile
 
 deps:
-	@scripts/install_deps.sh
+	@bash scripts/install_deps.sh
 
 build: deps
-	@scripts/build.sh
+	@bash scripts/build.sh
 
 test: build
-	@scripts/test.sh
+	@bash scripts/test.sh
 
 demo: build
-	@scripts/demo.sh
+	@bash scripts/demo.sh
 
 lint:
-	@scripts/lint.sh
+	@bash scripts/lint.sh
 
 clean:
 	@bash -c 'source scripts/env.sh && echo "[geofusion] removing $$GEOFUSION_WS" && rm -rf "$$GEOFUSION_WS"'

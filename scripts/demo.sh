@@ -10,8 +10,8 @@ set -u
 mkdir -p "$GEOFUSION_DATA/demo"
 bag="$GEOFUSION_DATA/demo/synthetic_demo.bag"
 say "generating the demo recording: $bag"
-geofusion_make_synthetic_bag=$(catkin_find --first-only geofusion geofusion_make_synthetic_bag)
-"$geofusion_make_synthetic_bag" --out "$bag" --frames 60 --seed 1 --malformed-every 10
+make_synthetic_bag=$(catkin_find --first-only geofusion make_synthetic_bag)
+"$make_synthetic_bag" --out "$bag" --frames 60 --seed 1 --malformed-every 10
 
 rviz=false
 [ "${RVIZ:-0}" = "1" ] && rviz=true

@@ -3,7 +3,8 @@
 set -euo pipefail
 source "$(dirname "$0")/env.sh"
 cd "$GEOFUSION_SRC"
-catkin_lint --strict -W2 --ignore unknown_package,missing_install_target "$GEOFUSION_SRC"
+# Lint the workspace link: catkin_lint wants the folder named like the package.
+catkin_lint --strict -W2 "$GEOFUSION_WS/src/geofusion"
 mapfile -t files < <(git ls-files '*.h' '*.cpp' 2>/dev/null || find include src test -name '*.h' -o -name '*.cpp')
 if [ ${#files[@]} -gt 0 ]; then
   clang-format --dry-run -Werror "${files[@]}"

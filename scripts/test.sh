@@ -4,7 +4,7 @@ set -euo pipefail
 source "$(dirname "$0")/env.sh"
 
 say "lint: catkin_lint and clang-format"
-"$GEOFUSION_SRC/scripts/lint.sh"
+bash "$GEOFUSION_SRC/scripts/lint.sh"
 
 set +u
 source "$GEOFUSION_WS/devel/setup.bash"

@@ -78,7 +78,8 @@ BoxScene BoxScene::demoScene() {
       placed(0.17, -0.12, h + 0.044982 + 0.018639, 10));
   add("061_foam_brick", 21, 0.052900, 0.077960, 0.067918, placed(-0.04, -0.19, h + 0.033959, 70));
   // Wood block lying on its side (rolled 90 degrees about x): its y edge is vertical.
-  add("036_wood_block", 16, 0.106668, 0.108480, 0.240242, placed(0.16, 0.17, h + 0.054240, -15, 90));
+  add("036_wood_block", 16, 0.106668, 0.108480, 0.240242,
+      placed(0.16, 0.17, h + 0.054240, -15, 90));
   return s;
 }
 
@@ -184,8 +185,9 @@ std::vector<RawDetection> synthesizeDetections(const BoxScene& scene, const Rend
     const Eigen::Vector3d dr(gauss(rng), gauss(rng), gauss(rng));
     const Eigen::Vector3d rotvec = noise.rotation_sigma_rad * dr;
     const Eigen::Quaterniond dq =
-        rotvec.norm() > 0 ? Eigen::Quaterniond(Eigen::AngleAxisd(rotvec.norm(), rotvec.normalized()))
-                          : Eigen::Quaterniond::Identity();
+        rotvec.norm() > 0
+            ? Eigen::Quaterniond(Eigen::AngleAxisd(rotvec.norm(), rotvec.normalized()))
+            : Eigen::Quaterniond::Identity();
     RawDetection d;
     d.class_name = obj.class_name;
     d.class_id = obj.class_id;

@@ -9,24 +9,15 @@ namespace geofusion {
 
 const char* toString(SkipReason reason) {
   switch (reason) {
-    case SkipReason::kNonFiniteTranslation:
-      return "non-finite translation";
-    case SkipReason::kNonFiniteRotation:
-      return "non-finite quaternion";
-    case SkipReason::kZeroQuaternion:
-      return "zero quaternion";
-    case SkipReason::kNonUnitQuaternion:
-      return "non-unit quaternion";
-    case SkipReason::kEmptyClass:
-      return "empty class name";
-    case SkipReason::kBadScore:
-      return "score not in [0, 1]";
-    case SkipReason::kLowScore:
-      return "score below min_score";
-    case SkipReason::kOutOfRange:
-      return "beyond max_range_m";
-    case SkipReason::kCount:
-      break;
+    case SkipReason::kNonFiniteTranslation: return "non-finite translation";
+    case SkipReason::kNonFiniteRotation: return "non-finite quaternion";
+    case SkipReason::kZeroQuaternion: return "zero quaternion";
+    case SkipReason::kNonUnitQuaternion: return "non-unit quaternion";
+    case SkipReason::kEmptyClass: return "empty class name";
+    case SkipReason::kBadScore: return "score not in [0, 1]";
+    case SkipReason::kLowScore: return "score below min_score";
+    case SkipReason::kOutOfRange: return "beyond max_range_m";
+    case SkipReason::kCount: break;
   }
   return "unknown";
 }
@@ -62,14 +53,10 @@ std::string DetectionTally::summary() const {
 namespace {
 SkipReason toSkipReason(PoseStatus status) {
   switch (status) {
-    case PoseStatus::kNonFiniteTranslation:
-      return SkipReason::kNonFiniteTranslation;
-    case PoseStatus::kNonFiniteRotation:
-      return SkipReason::kNonFiniteRotation;
-    case PoseStatus::kZeroQuaternion:
-      return SkipReason::kZeroQuaternion;
-    default:
-      return SkipReason::kNonUnitQuaternion;
+    case PoseStatus::kNonFiniteTranslation: return SkipReason::kNonFiniteTranslation;
+    case PoseStatus::kNonFiniteRotation: return SkipReason::kNonFiniteRotation;
+    case PoseStatus::kZeroQuaternion: return SkipReason::kZeroQuaternion;
+    default: return SkipReason::kNonUnitQuaternion;
   }
 }
 }  // namespace

@@ -15,8 +15,7 @@ std::string seconds(double s) {
 }
 }  // namespace
 
-InputMonitor::InputMonitor(std::vector<std::string> input_names, const Config& config,
-                           double now_s)
+InputMonitor::InputMonitor(std::vector<std::string> input_names, const Config& config, double now_s)
     : names_(std::move(input_names)), config_(config) {
   reset(now_s);
 }
@@ -49,17 +48,15 @@ std::vector<std::string> InputMonitor::problems(double now_s) const {
     if (in.count == 0) {
       all_fresh = false;
       if (now_s - start_s_ > config_.stale_after_s) {
-        out.push_back("no message received on " + names_[i] + " in " +
-                      seconds(now_s - start_s_));
+        out.push_back("no message received on " + names_[i] + " in " + seconds(now_s - start_s_));
       }
       continue;
     }
     all_arriving_since = std::max(all_arriving_since, in.first_s);
     if (now_s - in.last_s > config_.stale_after_s) {
       all_fresh = false;
-      out.push_back("input " + names_[i] + " stopped: last message " +
-                    seconds(now_s - in.last_s) + " ago (" + std::to_string(in.count) +
-                    " received)");
+      out.push_back("input " + names_[i] + " stopped: last message " + seconds(now_s - in.last_s) +
+                    " ago (" + std::to_string(in.count) + " received)");
     }
   }
   if (!all_fresh) return out;

@@ -6,16 +6,11 @@ namespace geofusion {
 
 const char* toString(PoseStatus status) {
   switch (status) {
-    case PoseStatus::kValid:
-      return "valid";
-    case PoseStatus::kNonFiniteTranslation:
-      return "non-finite translation";
-    case PoseStatus::kNonFiniteRotation:
-      return "non-finite quaternion";
-    case PoseStatus::kZeroQuaternion:
-      return "zero quaternion";
-    case PoseStatus::kNonUnitQuaternion:
-      return "non-unit quaternion";
+    case PoseStatus::kValid: return "valid";
+    case PoseStatus::kNonFiniteTranslation: return "non-finite translation";
+    case PoseStatus::kNonFiniteRotation: return "non-finite quaternion";
+    case PoseStatus::kZeroQuaternion: return "zero quaternion";
+    case PoseStatus::kNonUnitQuaternion: return "non-unit quaternion";
   }
   return "unknown";
 }

@@ -3,9 +3,9 @@
 #include "geofusion/ros/conversions.h"
 #include "geofusion/ros/markers.h"
 #include "geofusion/ros/params.h"
+#include "geofusion/ros/tf_lookup.h"
 
 #include <sensor_msgs/image_encodings.h>
-#include <tf2_eigen/tf2_eigen.h>
 #include <visualization_msgs/MarkerArray.h>
 
 namespace geofusion {
@@ -52,8 +52,8 @@ DetectionViewer::DetectionViewer(ros::NodeHandle nh, ros::NodeHandle pnh)
 
   markers_pub_ = pnh_.advertise<visualization_msgs::MarkerArray>("detection_markers", 5);
 
-  reconfigure_ =
-      std::make_unique<dynamic_reconfigure::Server<geofusion::DetectionViewerConfig>>(pnh_);
+  reconfigure_ = std::make_unique<dynamic_reconfigure::Server<geofusion::DetectionViewerConfig>>(
+      reconfigure_mutex_, pnh_);
   geofusion::DetectionViewerConfig initial;
   initial.min_score = fbf.min_score;
   initial.max_range_m = fbf.max_range_m;
@@ -125,18 +125,16 @@ void DetectionViewer::onFrame(const sensor_msgs::ImageConstPtr& /*rgb*/,
     tf_timeout_s = tf_timeout_s_;
   }
   Eigen::Isometry3d T_odom_cam;
-  try {
-    const geometry_msgs::TransformStamped tf = tf_buffer_.lookupTransform(
-        odom_frame_, camera_frame, dets->header.stamp, ros::Duration(tf_timeout_s));
-    T_odom_cam = tf2::transformToEigen(tf);
-  } catch (const tf2::TransformException& e) {
+  std::string tf_error;
+  if (!lookupTransformWallTimeout(tf_buffer_, odom_frame_, camera_frame, dets->header.stamp,
+                                  tf_timeout_s, &T_odom_cam, &tf_error)) {
     std::lock_guard<std::mutex> lock(mutex_);
     ++tf_failures_;
     ROS_WARN_THROTTLE(warn_period_s_,
                       "geofusion: no TF from '%s' to '%s' at %.3f (%zu frame(s) so far): %s; "
                       "frame skipped",
                       camera_frame.c_str(), odom_frame_.c_str(), dets->header.stamp.toSec(),
-                      tf_failures_, e.what());
+                      tf_failures_, tf_error.c_str());
     return;
   }
 
@@ -150,16 +148,14 @@ void DetectionViewer::onFrame(const sensor_msgs::ImageConstPtr& /*rgb*/,
     axis_length_m = axis_length_m_;
   }
   if (frame_tally.totalSkipped() > 0) {
-    ROS_WARN_THROTTLE(warn_period_s_, "geofusion: frame %.3f on %s: %s",
-                      dets->header.stamp.toSec(), subscriber_->topics()[3].c_str(),
-                      frame_tally.summary().c_str());
+    ROS_WARN_THROTTLE(warn_period_s_, "geofusion: frame %.3f on %s: %s", dets->header.stamp.toSec(),
+                      subscriber_->topics()[3].c_str(), frame_tally.summary().c_str());
   }
   std_msgs::Header header;
   header.stamp = dets->header.stamp;
   header.frame_id = odom_frame_;
   markers_pub_.publish(detectionMarkers(world, header, axis_length_m));
-  ROS_INFO_ONCE("geofusion: first synchronised frame (%zu detection(s)) shown",
-                world.size());
+  ROS_INFO_ONCE("geofusion: first synchronised frame (%zu detection(s)) shown", world.size());
 }
 
 }  // namespace geofusion

@@ -73,7 +73,8 @@ visualization_msgs::MarkerArray detectionMarkers(const std::vector<WorldDetectio
     label.id = static_cast<int>(i);
     label.type = visualization_msgs::Marker::TEXT_VIEW_FACING;
     label.action = visualization_msgs::Marker::ADD;
-    label.pose.position = point(d.T_world_obj.translation() + Eigen::Vector3d(0, 0, 1.5 * axis_length_m));
+    label.pose.position =
+        point(d.T_world_obj.translation() + Eigen::Vector3d(0, 0, 1.5 * axis_length_m));
     label.pose.orientation.w = 1.0;
     label.scale.z = 0.5 * axis_length_m;
     label.color = color(1, 1, 1);

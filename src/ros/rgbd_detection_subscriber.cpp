@@ -5,7 +5,9 @@
 namespace geofusion {
 
 namespace {
-double wallNow() { return ros::WallTime::now().toSec(); }
+double wallNow() {
+  return ros::WallTime::now().toSec();
+}
 }  // namespace
 
 RgbdDetectionSubscriber::RgbdDetectionSubscriber(ros::NodeHandle nh, const Config& config,
@@ -38,7 +40,9 @@ RgbdDetectionSubscriber::RgbdDetectionSubscriber(ros::NodeHandle nh, const Confi
            topics()[1].c_str(), topics()[2].c_str(), topics()[3].c_str());
 }
 
-RgbdDetectionSubscriber::~RgbdDetectionSubscriber() { watchdog_.stop(); }
+RgbdDetectionSubscriber::~RgbdDetectionSubscriber() {
+  watchdog_.stop();
+}
 
 template <int I, class M>
 void RgbdDetectionSubscriber::onInput(const boost::shared_ptr<M const>& msg) {
@@ -50,9 +54,9 @@ void RgbdDetectionSubscriber::onInput(const boost::shared_ptr<M const>& msg) {
 void RgbdDetectionSubscriber::makeSynchronizer() {
   sync_ = std::make_unique<Sync>(Policy(config_.queue_size));
   sync_->setMaxIntervalDuration(ros::Duration(config_.max_interval_s));
-  sync_->registerCallback(
-      boost::bind(&RgbdDetectionSubscriber::onSynchronized, this, boost::placeholders::_1,
-                  boost::placeholders::_2, boost::placeholders::_3, boost::placeholders::_4));
+  sync_->registerCallback(boost::bind(&RgbdDetectionSubscriber::onSynchronized, this,
+                                      boost::placeholders::_1, boost::placeholders::_2,
+                                      boost::placeholders::_3, boost::placeholders::_4));
 }
 
 std::vector<std::string> RgbdDetectionSubscriber::topics() const {
@@ -82,9 +86,10 @@ void RgbdDetectionSubscriber::noteInput(std::size_t index, const ros::Time& stam
     monitor_->onMessage(index, wallNow());
   }
   if (jumped) {
-    ROS_WARN("geofusion: time jumped back from %.3f to %.3f on %s (a looping bag or a restarted "
-             "driver?); restarting synchronisation",
-             from.toSec(), stamp.toSec(), topics()[0].c_str());
+    ROS_WARN(
+        "geofusion: time jumped back from %.3f to %.3f on %s (a looping bag or a restarted "
+        "driver?); restarting synchronisation",
+        from.toSec(), stamp.toSec(), topics()[0].c_str());
     // The old synchroniser holds messages from the future: start a fresh one.
     {
       std::lock_guard<std::mutex> lock(sync_mutex_);

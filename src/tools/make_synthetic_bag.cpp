@@ -1,8 +1,8 @@
-// geofusion_make_synthetic_bag: writes a small, self-contained recording of the analytic demo
+// make_synthetic_bag: writes a small, self-contained recording of the analytic demo
 // scene with the topics and frames of a Fetch robot (REP-103/105), and a ground-truth YAML beside
 // it. Used by `make demo` and by the rostests; no model files needed.
 //
-//   geofusion_make_synthetic_bag --out demo.bag [--ground-truth demo_gt.yaml] [--frames 60]
+//   make_synthetic_bag --out demo.bag [--ground-truth demo_gt.yaml] [--frames 60]
 //       [--rate 10] [--seed 1] [--malformed-every 0] [--tf-until -1]
 //       [--depth-encoding 32FC1|16UC1] [--detection-stamp-offset 0]
 #include "geofusion/core/box_scene.h"
@@ -43,7 +43,7 @@ struct Options {
 };
 
 void usage() {
-  std::cerr << "usage: geofusion_make_synthetic_bag --out FILE.bag [--ground-truth FILE.yaml]\n"
+  std::cerr << "usage: make_synthetic_bag --out FILE.bag [--ground-truth FILE.yaml]\n"
                "         [--frames N=60] [--rate HZ=10] [--seed S=1] [--malformed-every K=0]\n"
                "         [--tf-until FRAME=-1] [--depth-encoding 32FC1|16UC1]\n"
                "         [--detection-stamp-offset SECONDS=0]\n";
@@ -57,17 +57,29 @@ Options parse(int argc, char** argv) {
       if (i + 1 >= argc) throw std::runtime_error("missing value after " + a);
       return argv[++i];
     };
-    if (a == "--out") o.out = next();
-    else if (a == "--ground-truth") o.ground_truth = next();
-    else if (a == "--frames") o.frames = std::stoi(next());
-    else if (a == "--rate") o.rate_hz = std::stod(next());
-    else if (a == "--seed") o.seed = static_cast<unsigned>(std::stoul(next()));
-    else if (a == "--malformed-every") o.malformed_every = std::stoi(next());
-    else if (a == "--tf-until") o.tf_until = std::stoi(next());
-    else if (a == "--depth-encoding") o.depth_encoding = next();
-    else if (a == "--detection-stamp-offset") o.detection_stamp_offset_s = std::stod(next());
-    else if (a == "-h" || a == "--help") { usage(); std::exit(0); }
-    else throw std::runtime_error("unknown option " + a);
+    if (a == "--out")
+      o.out = next();
+    else if (a == "--ground-truth")
+      o.ground_truth = next();
+    else if (a == "--frames")
+      o.frames = std::stoi(next());
+    else if (a == "--rate")
+      o.rate_hz = std::stod(next());
+    else if (a == "--seed")
+      o.seed = static_cast<unsigned>(std::stoul(next()));
+    else if (a == "--malformed-every")
+      o.malformed_every = std::stoi(next());
+    else if (a == "--tf-until")
+      o.tf_until = std::stoi(next());
+    else if (a == "--depth-encoding")
+      o.depth_encoding = next();
+    else if (a == "--detection-stamp-offset")
+      o.detection_stamp_offset_s = std::stod(next());
+    else if (a == "-h" || a == "--help") {
+      usage();
+      std::exit(0);
+    } else
+      throw std::runtime_error("unknown option " + a);
   }
   if (o.out.empty()) throw std::runtime_error("--out is required");
   if (o.frames < 1 || o.rate_hz <= 0) throw std::runtime_error("--frames and --rate must be > 0");
@@ -112,9 +124,9 @@ std::vector<geofusion::RawDetection> malformed() {
   base.score = 0.8;
   base.position_cam = Eigen::Vector3d(0.0, 0.0, 1.0);
   std::vector<geofusion::RawDetection> out(3, base);
-  out[0].position_cam.y() = nan;                               // NaN translation
-  out[1].orientation_cam = Eigen::Quaterniond(0, 0, 0, 0);     // zero quaternion
-  out[2].orientation_cam = Eigen::Quaterniond(0.9, 0.9, 0, 0); // non-unit quaternion
+  out[0].position_cam.y() = nan;                                // NaN translation
+  out[1].orientation_cam = Eigen::Quaterniond(0, 0, 0, 0);      // zero quaternion
+  out[2].orientation_cam = Eigen::Quaterniond(0.9, 0.9, 0, 0);  // non-unit quaternion
   return out;
 }
 
@@ -125,7 +137,7 @@ int main(int argc, char** argv) {
   try {
     opt = parse(argc, argv);
   } catch (const std::exception& e) {
-    std::cerr << "geofusion_make_synthetic_bag: " << e.what() << "\n";
+    std::cerr << "make_synthetic_bag: " << e.what() << "\n";
     usage();
     return 2;
   }
@@ -148,13 +160,12 @@ int main(int argc, char** argv) {
   try {
     bag.open(opt.out, rosbag::bagmode::Write);
   } catch (const std::exception& e) {
-    std::cerr << "geofusion_make_synthetic_bag: cannot write " << opt.out << ": " << e.what()
-              << "\n";
+    std::cerr << "make_synthetic_bag: cannot write " << opt.out << ": " << e.what() << "\n";
     return 1;
   }
   std::ofstream gt(opt.ground_truth);
   if (!gt) {
-    std::cerr << "geofusion_make_synthetic_bag: cannot write " << opt.ground_truth << "\n";
+    std::cerr << "make_synthetic_bag: cannot write " << opt.ground_truth << "\n";
     return 1;
   }
 
@@ -166,7 +177,7 @@ int main(int argc, char** argv) {
     bag.write("/tf_static", t0, statics);
   }
 
-  gt << "# Ground truth of a geofusion_make_synthetic_bag recording. Poses: position [x, y, z] m,\n"
+  gt << "# Ground truth of a make_synthetic_bag recording. Poses: position [x, y, z] m,\n"
         "# orientation [x, y, z, w]; world frame = odom (this recording has no drift).\n";
   gt << "frame_id: " << odom << "\ncamera_frame: " << optical << "\n";
   gt << "intrinsics: {width: " << K.width << ", height: " << K.height << ", fx: " << K.fx
@@ -188,7 +199,8 @@ int main(int argc, char** argv) {
     const double s = opt.frames > 1 ? static_cast<double>(k) / (opt.frames - 1) : 0.0;
     const double theta = M_PI - 0.5 * arc + arc * s;
     Eigen::Isometry3d T_odom_base = Eigen::Isometry3d::Identity();
-    T_odom_base.translation() = Eigen::Vector3d(radius * std::cos(theta), radius * std::sin(theta), 0);
+    T_odom_base.translation() =
+        Eigen::Vector3d(radius * std::cos(theta), radius * std::sin(theta), 0);
     T_odom_base.linear() =
         Eigen::AngleAxisd(theta + M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     const Eigen::Isometry3d T_odom_cam = T_odom_base * T_base_link * T_link_optical;
@@ -265,8 +277,8 @@ int main(int argc, char** argv) {
     gt << "  - {index: " << k << ", stamp: " << std::fixed;
     gt.precision(9);
     gt << stamp.toSec() << ", camera_position: " << vec(T_odom_cam.translation())
-       << ", camera_orientation: " << quat(T_odom_cam.linear()) << ", tf: "
-       << ((opt.tf_until < 0 || k <= opt.tf_until) ? "true" : "false")
+       << ", camera_orientation: " << quat(T_odom_cam.linear())
+       << ", tf: " << ((opt.tf_until < 0 || k <= opt.tf_until) ? "true" : "false")
        << ", malformed: " << (dets.size() - num_valid) << ", detections: [";
     for (std::size_t i = 0; i < num_valid; ++i) {
       ObjectMeasurement m;
@@ -279,8 +291,8 @@ int main(int argc, char** argv) {
     gt.unsetf(std::ios::fixed);
   }
   bag.close();
-  std::cout << "geofusion_make_synthetic_bag: wrote " << opt.frames << " frames ("
-            << total_detections << " detections, " << total_malformed << " of them malformed) to "
-            << opt.out << "; ground truth in " << opt.ground_truth << std::endl;
+  std::cout << "make_synthetic_bag: wrote " << opt.frames << " frames (" << total_detections
+            << " detections, " << total_malformed << " of them malformed) to " << opt.out
+            << "; ground truth in " << opt.ground_truth << std::endl;
   return 0;
 }

@@ -15,7 +15,8 @@ RawDetection good(const std::string& cls = "003_cracker_box") {
   d.class_id = 2;
   d.score = 0.9;
   d.position_cam = Eigen::Vector3d(0.1, -0.05, 0.8);
-  d.orientation_cam = Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 2, 3).normalized()));
+  d.orientation_cam =
+      Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 2, 3).normalized()));
   return d;
 }
 

@@ -17,10 +17,10 @@ def find_tool(name):
 
 
 def make_bag(name, *args):
-    """Writes a synthetic bag with geofusion_make_synthetic_bag; returns (bag, ground truth)."""
+    """Writes a synthetic bag with make_synthetic_bag; returns (bag, ground truth)."""
     out_dir = tempfile.mkdtemp(prefix='geofusion_test_')
     bag = os.path.join(out_dir, name + '.bag')
-    subprocess.check_call([find_tool('geofusion_make_synthetic_bag'), '--out', bag] +
+    subprocess.check_call([find_tool('make_synthetic_bag'), '--out', bag] +
                           [str(a) for a in args])
     with open(bag[:-4] + '_gt.yaml') as f:
         gt = yaml.safe_load(f)

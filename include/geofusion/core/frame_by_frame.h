@@ -40,7 +40,7 @@ struct DetectionTally {
 
 /// A detection placed in the world frame.
 struct WorldDetection {
-  ObjectMeasurement measurement;                                    ///< camera-frame measurement
+  ObjectMeasurement measurement;                                  ///< camera-frame measurement
   Eigen::Isometry3d T_world_obj = Eigen::Isometry3d::Identity();  ///< object pose in world frame
 };
 

@@ -23,7 +23,7 @@ struct RawDetection {
   std::string class_name;
   int class_id = -1;
   double score = 0.0;
-  Eigen::Vector3d position_cam = Eigen::Vector3d::Zero();      ///< metres, camera optical frame
+  Eigen::Vector3d position_cam = Eigen::Vector3d::Zero();  ///< metres, camera optical frame
   Eigen::Quaterniond orientation_cam = Eigen::Quaterniond::Identity();  ///< raw, unnormalised
   PixelBox box;
 };

@@ -11,6 +11,7 @@
 #include <ros/ros.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
+#include <boost/thread/recursive_mutex.hpp>
 
 #include <memory>
 #include <mutex>
@@ -48,6 +49,7 @@ class DetectionViewer {
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   ros::Publisher markers_pub_;
+  boost::recursive_mutex reconfigure_mutex_;
   std::unique_ptr<dynamic_reconfigure::Server<geofusion::DetectionViewerConfig>> reconfigure_;
   std::unique_ptr<RgbdDetectionSubscriber> subscriber_;
 };
