@@ -69,6 +69,11 @@ DetectionViewer::DetectionViewer(ros::NodeHandle nh, ros::NodeHandle pnh)
              const sensor_msgs::CameraInfoConstPtr& info,
              const geofusion::DetectionArrayConstPtr& dets) { onFrame(rgb, depth, info, dets); },
       [this](const ros::Time& from, const ros::Time& to) { onTimeJump(from, to); });
+  const double summary_period_s = paramAtLeast(pnh_, "summary_period_s", 10.0, 0.0);
+  if (summary_period_s > 0) {
+    summary_timer_ = pnh_.createWallTimer(ros::WallDuration(summary_period_s),
+                                          &DetectionViewer::logSummary, this);
+  }
   ROS_INFO("geofusion: detection viewer publishing %s in frame '%s'",
            markers_pub_.getTopic().c_str(), odom_frame_.c_str());
 }
@@ -77,6 +82,14 @@ DetectionViewer::~DetectionViewer() {
   subscriber_.reset();  // no more callbacks from here on
   std::lock_guard<std::mutex> lock(mutex_);
   ROS_INFO("geofusion: detection viewer summary: %s; %zu frame(s) without TF, %zu bad image(s)",
+           tally_.summary().c_str(), tf_failures_, bad_images_);
+}
+
+void DetectionViewer::logSummary(const ros::WallTimerEvent&) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (tally_.frames + tf_failures_ + bad_images_ == logged_frames_) return;  // nothing new
+  logged_frames_ = tally_.frames + tf_failures_ + bad_images_;
+  ROS_INFO("geofusion: detection viewer so far: %s; %zu frame(s) without TF, %zu bad image(s)",
            tally_.summary().c_str(), tf_failures_, bad_images_);
 }
 

@@ -32,6 +32,7 @@ class DetectionViewer {
                const geofusion::DetectionArrayConstPtr& dets);
   void onTimeJump(const ros::Time& from, const ros::Time& to);
   void onReconfigure(geofusion::DetectionViewerConfig& config, uint32_t level);
+  void logSummary(const ros::WallTimerEvent&);
 
   ros::NodeHandle nh_;
   ros::NodeHandle pnh_;
@@ -45,10 +46,12 @@ class DetectionViewer {
   DetectionTally tally_;
   std::size_t tf_failures_ = 0;
   std::size_t bad_images_ = 0;
+  std::size_t logged_frames_ = 0;  // tally_.frames at the last summary
 
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   ros::Publisher markers_pub_;
+  ros::WallTimer summary_timer_;
   boost::recursive_mutex reconfigure_mutex_;
   std::unique_ptr<dynamic_reconfigure::Server<geofusion::DetectionViewerConfig>> reconfigure_;
   std::unique_ptr<RgbdDetectionSubscriber> subscriber_;
