@@ -1,6 +1,6 @@
 # Sourced by the other scripts: where the out-of-tree catkin workspace lives, and the environment
 # that ROS 1 on Debian 12 needs.
-GEOFUSION_SRC="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+GEOFUSION_SRC="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)"
 # One workspace per clone, outside the source tree (override with GEOFUSION_WS).
 _geofusion_id=$(printf '%s' "$GEOFUSION_SRC" | md5sum | cut -c1-8)
 GEOFUSION_WS="${GEOFUSION_WS:-${XDG_CACHE_HOME:-$HOME/.cache}/geofusion/ws-$_geofusion_id}"

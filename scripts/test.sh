@@ -3,12 +3,9 @@
 set -euo pipefail
 source "$(dirname "$0")/env.sh"
 
-say "lint: catkin_lint and clang-format"
-bash "$GEOFUSION_SRC/scripts/lint.sh"
-
 set +u
 source "$GEOFUSION_WS/devel/setup.bash"
 set -u
 cd "$GEOFUSION_WS/build"
-say "ctest: core unit tests (gtest, no ROS master) and rostests (replayed bags)"
+say "ctest: lint, core unit tests (gtest, no ROS master) and rostests (replayed bags)"
 ctest --output-on-failure
