@@ -17,6 +17,18 @@ std_msgs::ColorRGBA color(float r, float g, float b, float a = 1.f) {
   return c;
 }
 
+visualization_msgs::Marker makeMarker(const std_msgs::Header& header, const char* ns, int id,
+                                      int type) {
+  visualization_msgs::Marker m;
+  m.header = header;
+  m.ns = ns;
+  m.id = id;
+  m.type = type;
+  m.action = visualization_msgs::Marker::ADD;
+  m.pose.orientation.w = 1.0;
+  return m;
+}
+
 geometry_msgs::Point point(const Eigen::Vector3d& p) {
   geometry_msgs::Point q;
   q.x = p.x();
@@ -39,23 +51,16 @@ visualization_msgs::MarkerArray detectionMarkers(const std::vector<WorldDetectio
     const WorldDetection& d = detections[i];
     const Rgb rgb = classColor(d.measurement.class_name);
 
-    visualization_msgs::Marker sphere;
-    sphere.header = header;
-    sphere.ns = kDetectionNs;
-    sphere.id = static_cast<int>(i);
-    sphere.type = visualization_msgs::Marker::SPHERE;
-    sphere.action = visualization_msgs::Marker::ADD;
+    const int id = static_cast<int>(i);
+    visualization_msgs::Marker sphere =
+        makeMarker(header, kDetectionNs, id, visualization_msgs::Marker::SPHERE);
     sphere.pose = toPoseMsg(d.T_world_obj);
     sphere.scale.x = sphere.scale.y = sphere.scale.z = 0.4 * axis_length_m;
     sphere.color = color(rgb.r, rgb.g, rgb.b, 0.9f);
     out.markers.push_back(sphere);
 
-    visualization_msgs::Marker axes;
-    axes.header = header;
-    axes.ns = kDetectionAxesNs;
-    axes.id = static_cast<int>(i);
-    axes.type = visualization_msgs::Marker::LINE_LIST;
-    axes.action = visualization_msgs::Marker::ADD;
+    visualization_msgs::Marker axes =
+        makeMarker(header, kDetectionAxesNs, id, visualization_msgs::Marker::LINE_LIST);
     axes.pose = toPoseMsg(d.T_world_obj);
     axes.scale.x = 0.08 * axis_length_m;  // line width
     const std_msgs::ColorRGBA axis_colors[3] = {color(1, 0, 0), color(0, 1, 0), color(0, 0, 1)};
@@ -67,15 +72,10 @@ visualization_msgs::MarkerArray detectionMarkers(const std::vector<WorldDetectio
     }
     out.markers.push_back(axes);
 
-    visualization_msgs::Marker label;
-    label.header = header;
-    label.ns = kDetectionLabelNs;
-    label.id = static_cast<int>(i);
-    label.type = visualization_msgs::Marker::TEXT_VIEW_FACING;
-    label.action = visualization_msgs::Marker::ADD;
+    visualization_msgs::Marker label =
+        makeMarker(header, kDetectionLabelNs, id, visualization_msgs::Marker::TEXT_VIEW_FACING);
     label.pose.position =
         point(d.T_world_obj.translation() + Eigen::Vector3d(0, 0, 1.5 * axis_length_m));
-    label.pose.orientation.w = 1.0;
     label.scale.z = 0.5 * axis_length_m;
     label.color = color(1, 1, 1);
     char text[128];
