@@ -1,0 +1,43 @@
+// Triangle meshes of object models: primitives the package makes itself, and files loaded with
+// assimp (OBJ with texture, PLY, STL). Units: metres, model frame.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace geofusion {
+
+struct TriangleMesh {
+  std::vector<Eigen::Vector3f> vertices;
+  std::vector<Eigen::Vector3i> triangles;  ///< counter-clockwise seen from outside
+  std::vector<Eigen::Vector2f> uvs;        ///< per vertex, empty when untextured
+  std::string texture_path;                ///< diffuse texture image, empty when none
+
+  bool empty() const { return vertices.empty() || triangles.empty(); }
+  double surfaceArea() const;
+  /// Axis-aligned bounds in the model frame.
+  void bounds(Eigen::Vector3f* min, Eigen::Vector3f* max) const;
+  Eigen::Vector3f extents() const;
+};
+
+/// Box of full edge lengths `size`, centred at the origin, edges along the axes.
+TriangleMesh makeBox(const Eigen::Vector3d& size);
+/// Cylinder of `radius` and `height` about the z axis, centred at the origin, `segments` sides.
+TriangleMesh makeCylinder(double radius, double height, int segments = 48);
+
+/// Loads a mesh file with assimp (all sub-meshes merged, triangulated). On failure returns false
+/// and `error` names the file and the reason (missing, unreadable, no triangles).
+bool loadMesh(const std::string& path, TriangleMesh* mesh, std::string* error);
+
+/// `count` points on the surface, area-weighted, deterministic for a given seed.
+std::vector<Eigen::Vector3f> sampleSurfacePoints(const TriangleMesh& mesh, std::size_t count,
+                                                 std::uint32_t seed = 1);
+
+/// Reads an "x y z" per line points file (YCB-Video points.xyz). False with `error` on failure.
+bool loadPointsXyz(const std::string& path, std::vector<Eigen::Vector3f>* points,
+                   std::string* error);
+
+}  // namespace geofusion

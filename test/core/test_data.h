@@ -1,0 +1,22 @@
+// Where tests find the YCB-Video models: $GEOFUSION_YCB_DIR, else ../shared/data/ycb_video
+// beside the repository. They are licensed data and never copied into the repository.
+#pragma once
+
+#include <cstdlib>
+#include <fstream>
+#include <string>
+
+namespace geofusion {
+namespace test {
+
+inline std::string ycbDir() {
+  if (const char* env = std::getenv("GEOFUSION_YCB_DIR")) return env;
+  return std::string(GEOFUSION_SOURCE_DIR) + "/../shared/data/ycb_video";
+}
+
+inline bool haveYcb() {
+  return std::ifstream(ycbDir() + "/classes.txt").good();
+}
+
+}  // namespace test
+}  // namespace geofusion
