@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <string>
+#include <vector>
 
 namespace geofusion {
 namespace test {
@@ -12,6 +13,14 @@ namespace test {
 inline std::string ycbDir() {
   if (const char* env = std::getenv("GEOFUSION_YCB_DIR")) return env;
   return std::string(GEOFUSION_SOURCE_DIR) + "/../shared/data/ycb_video";
+}
+
+/// True when any of the messages contains `what`.
+inline bool anyMentions(const std::vector<std::string>& messages, const std::string& what) {
+  for (const auto& m : messages) {
+    if (m.find(what) != std::string::npos) return true;
+  }
+  return false;
 }
 
 inline bool haveYcb() {

@@ -1,4 +1,5 @@
 #include "geofusion/core/input_monitor.h"
+#include "test_data.h"
 
 #include <gtest/gtest.h>
 
@@ -6,10 +7,7 @@ namespace geofusion {
 namespace {
 
 bool mentions(const std::vector<std::string>& problems, const std::string& what) {
-  for (const auto& p : problems) {
-    if (p.find(what) != std::string::npos) return true;
-  }
-  return false;
+  return test::anyMentions(problems, what);
 }
 
 InputMonitor::Config config() {

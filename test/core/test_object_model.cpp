@@ -10,12 +10,7 @@
 namespace geofusion {
 namespace {
 
-bool anyMentions(const std::vector<std::string>& errors, const std::string& what) {
-  for (const auto& e : errors) {
-    if (e.find(what) != std::string::npos) return true;
-  }
-  return false;
-}
+using test::anyMentions;
 
 TEST(ModelSet, BuiltinPrimitivesHaveTheirFeaturesSymmetryAndPoints) {
   const ModelSet set = ModelSet::builtinPrimitives();
