@@ -93,11 +93,6 @@ void DetectionViewer::logSummary(const ros::WallTimerEvent&) {
            tally_.summary().c_str(), tf_failures_, bad_images_);
 }
 
-DetectionTally DetectionViewer::tally() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return tally_;
-}
-
 void DetectionViewer::onReconfigure(geofusion::DetectionViewerConfig& config, uint32_t) {
   std::lock_guard<std::mutex> lock(mutex_);
   FrameByFrame::Config fbf = fbf_.config();

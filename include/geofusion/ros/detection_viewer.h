@@ -24,8 +24,6 @@ class DetectionViewer {
   DetectionViewer(ros::NodeHandle nh, ros::NodeHandle pnh);
   ~DetectionViewer();
 
-  DetectionTally tally() const;
-
  private:
   void onFrame(const sensor_msgs::ImageConstPtr& rgb, const sensor_msgs::ImageConstPtr& depth,
                const sensor_msgs::CameraInfoConstPtr& info,
