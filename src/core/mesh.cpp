@@ -2,6 +2,7 @@
 
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <meshoptimizer.h>
 #include <Eigen/Geometry>
 #include <assimp/Importer.hpp>
 
@@ -134,7 +135,12 @@ bool loadMesh(const std::string& path, TriangleMesh* mesh, std::string* error) {
       if (scene->mMaterials[am->mMaterialIndex]->GetTexture(aiTextureType_DIFFUSE, 0, &tex) ==
           AI_SUCCESS) {
         const std::string dir = path.substr(0, path.find_last_of('/') + 1);
-        out.texture_path = dir + tex.C_Str();
+        // MTL files often carry trailing blanks after the file name (the YCB-Video ones do).
+        std::string name = tex.C_Str();
+        const auto first = name.find_first_not_of(" \t\r\n");
+        const auto last = name.find_last_not_of(" \t\r\n");
+        name = first == std::string::npos ? std::string() : name.substr(first, last - first + 1);
+        if (!name.empty()) out.texture_path = dir + name;
       }
     }
   }
@@ -151,6 +157,52 @@ bool loadMesh(const std::string& path, TriangleMesh* mesh, std::string* error) {
   }
   *mesh = std::move(out);
   return true;
+}
+
+TriangleMesh simplifyMesh(const TriangleMesh& mesh, std::size_t target_triangles,
+                          double max_error_m, double* achieved_error_m) {
+  if (achieved_error_m) *achieved_error_m = 0.0;
+  if (mesh.empty()) return TriangleMesh();
+  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "packed vertices");
+  static_assert(sizeof(Eigen::Vector3i) == 3 * sizeof(unsigned int), "packed triangles");
+  const std::size_t index_count = mesh.triangles.size() * 3;
+  const auto* indices = reinterpret_cast<const unsigned int*>(mesh.triangles.data());
+  // Weld by position so texture seams do not become borders the simplifier must keep.
+  std::vector<unsigned int> remap(mesh.vertices.size());
+  const std::size_t unique =
+      meshopt_generateVertexRemap(remap.data(), indices, index_count, mesh.vertices.data(),
+                                  mesh.vertices.size(), sizeof(Eigen::Vector3f));
+  TriangleMesh out;
+  out.vertices.resize(unique);
+  meshopt_remapVertexBuffer(out.vertices.data(), mesh.vertices.data(), mesh.vertices.size(),
+                            sizeof(Eigen::Vector3f), remap.data());
+  std::vector<unsigned int> welded(index_count);
+  meshopt_remapIndexBuffer(welded.data(), indices, index_count, remap.data());
+
+  std::vector<unsigned int> simplified(index_count);
+  std::size_t kept = index_count;
+  if (mesh.triangles.size() > target_triangles) {
+    const float* positions = reinterpret_cast<const float*>(out.vertices.data());
+    const float scale = meshopt_simplifyScale(positions, unique, sizeof(Eigen::Vector3f));
+    float relative_error = 0.f;
+    kept = meshopt_simplify(simplified.data(), welded.data(), index_count, positions, unique,
+                            sizeof(Eigen::Vector3f), target_triangles * 3,
+                            static_cast<float>(max_error_m / std::max(scale, 1e-9f)), 0,
+                            &relative_error);
+    if (achieved_error_m) *achieved_error_m = static_cast<double>(relative_error * scale);
+  } else {
+    simplified = welded;
+  }
+  simplified.resize(kept);
+  // Drop the vertices no triangle uses any more.
+  const std::size_t used =
+      meshopt_optimizeVertexFetch(out.vertices.data(), simplified.data(), kept, out.vertices.data(),
+                                  unique, sizeof(Eigen::Vector3f));
+  out.vertices.resize(used);
+  out.triangles.resize(kept / 3);
+  std::copy(simplified.begin(), simplified.end(),
+            reinterpret_cast<unsigned int*>(out.triangles.data()));
+  return out;
 }
 
 std::vector<Eigen::Vector3f> sampleSurfacePoints(const TriangleMesh& mesh, std::size_t count,

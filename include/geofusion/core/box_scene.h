@@ -4,6 +4,7 @@
 // generator of the data issue supersedes it for benchmarks.)
 #pragma once
 
+#include "geofusion/core/camera.h"
 #include "geofusion/core/class_palette.h"
 #include "geofusion/core/measurement.h"
 
@@ -15,16 +16,6 @@
 #include <vector>
 
 namespace geofusion {
-
-/// Pinhole intrinsics of a 640x480 PrimeSense Carmine class camera (Fetch head camera).
-struct PinholeIntrinsics {
-  int width = 640;
-  int height = 480;
-  double fx = 554.254691191187;
-  double fy = 554.254691191187;
-  double cx = 320.5;
-  double cy = 240.5;
-};
 
 /// A box-shaped object whose model frame sits at the box centre, axes along its edges.
 struct BoxObject {

@@ -1,21 +1,14 @@
 // Core (ROS-free) types for per-frame object detections.
 #pragma once
 
+#include "geofusion/core/camera.h"
+
 #include <Eigen/Geometry>
 
 #include <string>
 #include <vector>
 
 namespace geofusion {
-
-/// A 2D box in image pixels; width or height of 0 means "no box".
-struct PixelBox {
-  int x = 0;
-  int y = 0;
-  int width = 0;
-  int height = 0;
-  bool valid() const { return width > 0 && height > 0; }
-};
 
 /// A detection as it arrives from the perception stack, before any check: the pose is raw
 /// (it may hold NaNs or a non-unit quaternion). Mirrors geofusion/Detection.msg.

@@ -32,6 +32,13 @@ TriangleMesh makeCylinder(double radius, double height, int segments = 48);
 /// and `error` names the file and the reason (missing, unreadable, no triangles).
 bool loadMesh(const std::string& path, TriangleMesh* mesh, std::string* error);
 
+/// A lighter copy of `mesh` for depth rendering: vertices welded by position (uvs and texture
+/// dropped), then edge collapses (meshoptimizer) towards `target_triangles` while the geometric
+/// deviation stays below `max_error_m`. `achieved_error_m`, when given, receives meshoptimizer's
+/// estimate of the deviation. Meshes already at or below the target come back welded only.
+TriangleMesh simplifyMesh(const TriangleMesh& mesh, std::size_t target_triangles,
+                          double max_error_m, double* achieved_error_m = nullptr);
+
 /// `count` points on the surface, area-weighted, deterministic for a given seed.
 std::vector<Eigen::Vector3f> sampleSurfacePoints(const TriangleMesh& mesh, std::size_t count,
                                                  std::uint32_t seed = 1);
