@@ -5,8 +5,8 @@
 //   consistency_benchmark [--models DIR] [--rounds N] [--full-frame] [--stride N]
 //
 // DIR holds the YCB-Video models (default: ../shared/data/ycb_video beside the source tree);
-// without it the built-in primitive models are used and the output says so. llvmpipe's thread
-// count is LP_NUM_THREADS; the benchmark sets it to 1 (one core) unless it is already set.
+// without it the built-in primitive models are used and the output says so. The renderer
+// rasterises in the calling thread (one core) unless LP_NUM_THREADS says otherwise.
 #include "geofusion/core/consistency.h"
 #include "geofusion/core/object_model.h"
 
@@ -56,7 +56,6 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  setenv("LP_NUM_THREADS", "1", 0);
 
   ModelSet models;
   std::vector<std::string> errors;
@@ -173,7 +172,7 @@ int main(int argc, char** argv) {
   const double total_s = std::accumulate(ms.begin(), ms.end(), 0.0) / 1000.0;
   std::printf("consistency score speed (%s, %s, stride %d, LP_NUM_THREADS=%s)\n",
               models.name().c_str(), full_frame ? "full-frame render" : "region render", stride,
-              std::getenv("LP_NUM_THREADS"));
+              std::getenv("LP_NUM_THREADS") ? std::getenv("LP_NUM_THREADS") : "unset");
   std::printf("  detections a round      %zu, rounds %d\n", objects.size(), rounds);
   std::printf("  triangles               %zu in the meshes, %zu rendered for scoring\n", triangles,
               full_frame ? triangles : render_triangles);

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <limits>
 #include <mutex>
@@ -142,6 +143,7 @@ OffscreenRenderer::OffscreenRenderer(const Options& options) : impl_(std::make_u
   d.options.max_width = std::max(1, options.max_width);
   d.options.max_height = std::max(1, options.max_height);
   d.window.assign(16 * 16 * 4, 0);
+  if (options.single_threaded) setenv("LP_NUM_THREADS", "0", /*overwrite=*/0);
   d.context = OSMesaCreateContextExt(OSMESA_RGBA, 24, 0, 0, nullptr);
   if (!d.context) {
     d.error = "OSMesa: could not create an offscreen context (is libosmesa6 installed?)";
@@ -409,9 +411,12 @@ bool OffscreenRenderer::render(const PinholeIntrinsics& K, const std::vector<Ren
     flip_rows(d.color_rows, &out->rgb, 3);
   }
   if (channels & (kDepth | kInstance)) {
+    const bool ids = (channels & kInstance) != 0;
     glClearColor(0.f, 0.f, 0.f, 0.f);
-    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    glColorMask(ids, ids, ids, ids);  // depth alone writes no colour
+    glClear(ids ? GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT : GL_DEPTH_BUFFER_BIT);
     d.drawItems(items, true, false);
+    glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
     if (channels & kInstance) {
       d.color_rows.resize(pixels * 4);
       glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, d.color_rows.data());

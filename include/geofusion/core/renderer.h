@@ -47,6 +47,10 @@ class OffscreenRenderer {
     int max_width = 1280;  ///< largest image/region that can be rendered
     int max_height = 1024;
     int max_texture_size = 1024;  ///< textures are downscaled to this edge length
+    /// Rasterise in the calling thread (llvmpipe's LP_NUM_THREADS=0): for the small regions the
+    /// consistency score renders, worker threads cost more than they give. Applied only when
+    /// LP_NUM_THREADS is not already set, and only before the process's first OSMesa context.
+    bool single_threaded = true;
   };
 
   OffscreenRenderer();
