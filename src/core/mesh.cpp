@@ -3,6 +3,8 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <meshoptimizer.h>
+#include <pcl/point_types.h>
+#include <pcl/surface/convex_hull.h>
 #include <Eigen/Geometry>
 #include <assimp/Importer.hpp>
 
@@ -202,6 +204,38 @@ TriangleMesh simplifyMesh(const TriangleMesh& mesh, std::size_t target_triangles
   out.triangles.resize(kept / 3);
   std::copy(simplified.begin(), simplified.end(),
             reinterpret_cast<unsigned int*>(out.triangles.data()));
+  return out;
+}
+
+TriangleMesh convexHull(const std::vector<Eigen::Vector3f>& points) {
+  TriangleMesh out;
+  if (points.size() < 4) return out;
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
+  cloud->reserve(points.size());
+  for (const auto& p : points) cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
+  pcl::ConvexHull<pcl::PointXYZ> hull;
+  hull.setInputCloud(cloud);
+  hull.setDimension(3);
+  pcl::PointCloud<pcl::PointXYZ> hull_cloud;
+  std::vector<pcl::Vertices> polygons;
+  hull.reconstruct(hull_cloud, polygons);
+  if (hull_cloud.size() < 4 || polygons.empty()) return out;
+  for (const auto& p : hull_cloud) out.vertices.emplace_back(p.x, p.y, p.z);
+  Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
+  for (const auto& v : out.vertices) centroid += v;
+  centroid /= static_cast<float>(out.vertices.size());
+  for (const auto& poly : polygons) {
+    // Fan-triangulate (qhull's output is triangulated already; this is for safety), outward.
+    for (std::size_t k = 1; k + 1 < poly.vertices.size(); ++k) {
+      Eigen::Vector3i t(static_cast<int>(poly.vertices[0]), static_cast<int>(poly.vertices[k]),
+                        static_cast<int>(poly.vertices[k + 1]));
+      const Eigen::Vector3f a = out.vertices[t[0]], b = out.vertices[t[1]], c = out.vertices[t[2]];
+      const Eigen::Vector3f n = (b - a).cross(c - a);
+      if (n.squaredNorm() < 1e-24f) continue;
+      if (n.dot((a + b + c) / 3.f - centroid) < 0.f) std::swap(t[1], t[2]);
+      out.triangles.push_back(t);
+    }
+  }
   return out;
 }
 

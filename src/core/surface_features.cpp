@@ -1,8 +1,5 @@
 #include "geofusion/core/surface_features.h"
 
-#include <pcl/point_cloud.h>
-#include <pcl/point_types.h>
-#include <pcl/surface/convex_hull.h>
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
@@ -63,44 +60,27 @@ SurfaceFeatures extractSurfaceFeatures(const std::vector<Eigen::Vector3f>& point
                                        const SurfaceFeatureConfig& cfg) {
   SurfaceFeatures out;
   if (points.size() < 4) return out;
-  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
-  cloud->reserve(points.size());
-  for (const auto& p : points) cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
-  pcl::ConvexHull<pcl::PointXYZ> hull;
-  hull.setInputCloud(cloud);
-  hull.setDimension(3);
-  pcl::PointCloud<pcl::PointXYZ> hull_cloud;
-  std::vector<pcl::Vertices> polygons;
-  hull.reconstruct(hull_cloud, polygons);
-  if (hull_cloud.size() < 4 || polygons.empty()) return out;
-
+  const TriangleMesh hull = convexHull(points);
+  if (hull.vertices.size() < 4 || hull.triangles.empty()) return out;
   std::vector<Eigen::Vector3d> hv;
-  hv.reserve(hull_cloud.size());
-  for (const auto& p : hull_cloud) hv.emplace_back(p.x, p.y, p.z);
-  Eigen::Vector3d hull_centroid = Eigen::Vector3d::Zero();
-  for (const auto& p : hv) hull_centroid += p;
-  hull_centroid /= static_cast<double>(hv.size());
+  hv.reserve(hull.vertices.size());
+  for (const auto& p : hull.vertices) hv.push_back(p.cast<double>());
 
   std::vector<Facet> facets;
   double total_area = 0.0;
-  for (const auto& poly : polygons) {
-    if (poly.vertices.size() < 3) continue;
-    // Fan-triangulate (qhull's output is triangulated already; this is for safety).
-    for (std::size_t k = 1; k + 1 < poly.vertices.size(); ++k) {
-      Facet f;
-      f.v[0] = static_cast<int>(poly.vertices[0]);
-      f.v[1] = static_cast<int>(poly.vertices[k]);
-      f.v[2] = static_cast<int>(poly.vertices[k + 1]);
-      const Eigen::Vector3d a = hv[f.v[0]], b = hv[f.v[1]], c = hv[f.v[2]];
-      const Eigen::Vector3d n = (b - a).cross(c - a);
-      f.area = 0.5 * n.norm();
-      if (f.area < 1e-12) continue;
-      f.centroid = (a + b + c) / 3.0;
-      f.normal = n.normalized();
-      if (f.normal.dot(f.centroid - hull_centroid) < 0) f.normal = -f.normal;
-      total_area += f.area;
-      facets.push_back(f);
-    }
+  for (const auto& t : hull.triangles) {  // outward, counter-clockwise
+    Facet f;
+    f.v[0] = t[0];
+    f.v[1] = t[1];
+    f.v[2] = t[2];
+    const Eigen::Vector3d a = hv[f.v[0]], b = hv[f.v[1]], c = hv[f.v[2]];
+    const Eigen::Vector3d n = (b - a).cross(c - a);
+    f.area = 0.5 * n.norm();
+    if (f.area < 1e-12) continue;
+    f.centroid = (a + b + c) / 3.0;
+    f.normal = n.normalized();
+    total_area += f.area;
+    facets.push_back(f);
   }
 
   // Planes: greedy region growing from the largest unassigned facet.

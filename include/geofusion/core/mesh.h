@@ -39,6 +39,10 @@ bool loadMesh(const std::string& path, TriangleMesh* mesh, std::string* error);
 TriangleMesh simplifyMesh(const TriangleMesh& mesh, std::size_t target_triangles,
                           double max_error_m, double* achieved_error_m = nullptr);
 
+/// Convex hull of the points (qhull through PCL), triangles counter-clockwise seen from outside.
+/// Empty for fewer than 4 points or degenerate (flat) input.
+TriangleMesh convexHull(const std::vector<Eigen::Vector3f>& points);
+
 /// `count` points on the surface, area-weighted, deterministic for a given seed.
 std::vector<Eigen::Vector3f> sampleSurfacePoints(const TriangleMesh& mesh, std::size_t count,
                                                  std::uint32_t seed = 1);
