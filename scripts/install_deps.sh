@@ -17,7 +17,7 @@ PACKAGES=(
   librosbag-dev python3-rosbag librostest-dev python3-rostest libdiagnostic-updater-dev rviz
   # the core's libraries
   libeigen3-dev libceres-dev libpcl-conversions-dev libopencv-dev libmrpt-poses-dev libfcl-dev
-  liboctomap-dev libosmesa6-dev libmeshoptimizer-dev libassimp-dev libyaml-cpp-dev libgtest-dev
+  liboctomap-dev libosmesa6-dev libmeshoptimizer-dev libbullet-dev libassimp-dev libyaml-cpp-dev libgtest-dev
   # tools, tests, screenshots
   python3-numpy python3-yaml xvfb imagemagick
 )

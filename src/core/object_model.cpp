@@ -81,12 +81,17 @@ Symmetry boxSymmetry() {
 
 }  // namespace
 
+TriangleMesh collisionHull(const TriangleMesh& mesh) {
+  return convexHull(simplifyMesh(mesh, 400, 0.002).vertices);
+}
+
 void ModelSet::add(ObjectModel model, const SurfaceFeatureConfig& feature_config) {
   model.extents = model.mesh.extents();
   if (model.points.empty()) model.points = sampleSurfacePoints(model.mesh, kSampledPoints);
   if (model.features.planes.empty() && model.features.curves.empty()) {
     model.features = extractSurfaceFeatures(model.mesh, feature_config);
   }
+  if (model.collision_hull.empty()) model.collision_hull = collisionHull(model.mesh);
   by_name_[model.name] = models_.size();
   models_.push_back(std::make_shared<const ObjectModel>(std::move(model)));
 }

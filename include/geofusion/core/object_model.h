@@ -29,7 +29,13 @@ struct ObjectModel {
   Symmetry symmetry;
   SurfaceFeatures features;
   Eigen::Vector3f extents = Eigen::Vector3f::Zero();  ///< axis-aligned size, metres
+  /// Convex hull of a simplified mesh: the shape physics (Bullet) and collision checks (FCL) use.
+  TriangleMesh collision_hull;
 };
+
+/// The convex collision hull ObjectModel::collision_hull holds (hull of a <= 400-triangle,
+/// <= 2 mm simplification of the mesh).
+TriangleMesh collisionHull(const TriangleMesh& mesh);
 
 class ModelSet {
  public:
