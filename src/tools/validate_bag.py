@@ -163,12 +163,13 @@ class ImageStats(TopicStats):
         self.sizes = collections.Counter()
         self.empty = []                  # (index, why)
         self.big_endian = 0
-        self.stamps = []                 # (header stamp, receive time), receive order
+        self.stamps = []                 # (header stamp, receive time), receive order; no zeros
 
     def add_image(self, msg, rec):
         stamp = msg.header.stamp.to_sec()
         index = self.add(stamp, rec, msg.header.frame_id)
-        self.stamps.append((stamp, rec))
+        if stamp != 0.0:
+            self.stamps.append((stamp, rec))
         self.encodings[msg.encoding] += 1
         self.sizes[(msg.width, msg.height)] += 1
         if msg.is_bigendian:
@@ -188,7 +189,8 @@ class CameraInfoStats(TopicStats):
     def add_info(self, msg, rec):
         stamp = msg.header.stamp.to_sec()
         index = self.add(stamp, rec, msg.header.frame_id)
-        self.stamps.append(stamp)
+        if stamp != 0.0:
+            self.stamps.append(stamp)
         self.sizes[(msg.width, msg.height)] += 1
         fx, fy = msg.K[0], msg.K[4]
         if not (math.isfinite(fx) and math.isfinite(fy)) or fx == 0.0 or fy == 0.0:
@@ -496,11 +498,12 @@ def size_text(size):
 
 def check_rates(report, rec):
     for stats in (rec.rgb, rec.depth, rec.info, rec.detections, rec.odom,
-                  rec.tf.topics[TF_TOPIC]):
+                  rec.tf.topics[TF_TOPIC], rec.tf.topics[TF_STATIC_TOPIC]):
         if stats.count == 0:
             continue
         rate = stats.rate_hz()
-        text = '%d messages, %s' % (stats.count, '%.1f Hz' % rate if rate else 'rate n/a')
+        text = '%s, %s' % (plural(stats.count, 'message'), '%.1f Hz' % rate if rate else
+                           'rate n/a')
         if isinstance(stats, ImageStats):
             text += ', %s, %s' % (describe_counter(stats.encodings),
                                   describe_counter(stats.sizes, size_text))
@@ -530,8 +533,8 @@ def check_images(report, rec):
             report.warning(stats.topic, '%d big-endian depth images (is_bigendian=1); the '
                            'estimator reads them as little-endian' % stats.big_endian)
         if not bad and not stats.empty:
-            report.ok(stats.topic, 'all %d images non-empty, %s' % (
-                stats.count, describe_counter(stats.encodings)))
+            report.ok(stats.topic, 'all %d images non-empty, with a supported encoding' %
+                      stats.count)
     if rec.rgb.count and rec.depth.count and set(rec.rgb.sizes) != set(rec.depth.sizes):
         report.error(rec.depth.topic, 'depth image size %s differs from the RGB image size %s '
                      '(%s): depth must be registered to the RGB camera' % (
@@ -548,7 +551,7 @@ def check_camera_info(report, rec):
                        '%d of %d camera_info messages have a zero or non-finite focal length: %s'
                        % (len(info.bad_focal), info.count,
                           examples('message %d: fx=%g fy=%g' % b for b in info.bad_focal)))
-    image_sizes = set(rec.rgb.sizes) | set(rec.depth.sizes)
+    image_sizes = set(rec.rgb.sizes or rec.depth.sizes)   # camera_info describes the RGB camera
     if image_sizes:
         bad = {s: n for s, n in info.sizes.items() if s not in image_sizes}
         if bad:
@@ -618,10 +621,10 @@ def check_sync(report, rec, clock):
         if synced == 0:
             text = 'no detection message synchronises: none of the %d has' % det.count
         else:
-            text = '%d of %d detection messages have no' % (unsynced, det.count)
-        text += ' an RGB image and a depth image within %.3f s of its stamp (%s)' % (
-            spread, '; '.join(why))
-        if offsets:
+            text = '%d of %d detection messages lack' % (unsynced, det.count)
+        text += ' an RGB image and a depth image within %.3f s of %s stamp (%s)' % (
+            spread, 'its' if synced == 0 else 'their', '; '.join(why))
+        if len(offsets) >= 3:
             offsets.sort()
             median = offsets[len(offsets) // 2]
             if abs(median) > spread:
@@ -664,14 +667,14 @@ def check_detections(report, rec):
                       det.detections, det.detections / det.count, det.empty_messages))
 
 
-def check_frames(report, rec, clock):
+def check_frames(report, rec):
     """Detections and images must be in frames that TF links to the odometry frame."""
     args, tf = rec.args, rec.tf
     known = tf.frames()
     dynamic_edges = set()
     for name, n in tf.slashed.most_common():
-        report.warning('/tf', "frame id '%s' starts with '/' in %d transforms (tf2 strips it, "
-                       "but lookups with it fail)" % (name, n))
+        report.warning('/tf', "frame id '%s' starts with '/' in %s (tf2 strips it, but "
+                       "lookups with it fail)" % (name, plural(n, 'transform')))
     children = collections.defaultdict(set)
     for parent, child in list(tf.dynamic) + list(tf.static):
         children[child].add(parent)
@@ -718,7 +721,7 @@ def check_frames(report, rec, clock):
                 continue
             dyn = [e for e in path if e in tf.dynamic and e not in tf.static]
             dynamic_edges.update(dyn)
-            report.ok(subject, "%s frame '%s' links to '%s' through TF: %s" % (
+            report.ok(subject, "%s in frame '%s' link to '%s' through TF: %s" % (
                 what, frame, args.odom_frame, ' - '.join(chain(path, name)) or 'same frame'))
 
     rgb_frames = set(rec.rgb.frames)
@@ -807,8 +810,8 @@ def check_odometry(report, rec):
 
 
 def check_tf_stamps(report, rec, clock):
-    for child, stats in sorted(rec.tf.per_child.items()):
-        check_stamps(report, stats, clock, 'transforms')
+    for child in sorted(rec.tf.per_child):
+        check_stamps(report, rec.tf.per_child[child], clock, 'transforms')
 
 
 def validate(rec):
@@ -830,7 +833,7 @@ def validate(rec):
     check_camera_info(report, rec)
     check_detections(report, rec)
     check_sync(report, rec, clock)
-    edges = check_frames(report, rec, clock)
+    edges = check_frames(report, rec)
     check_tf_coverage(report, rec, edges, clock)
     check_odometry(report, rec)
     return report
@@ -908,7 +911,7 @@ def main(argv=None):
     if report.errors:
         verdict = 'fix the errors before running the estimator'
     elif report.warnings:
-        verdict = 'usable; the warnings cost frames or detections'
+        verdict = 'usable, but read the warnings: they cost frames or detections'
     else:
         verdict = 'ready for the estimator'
     print('SUMMARY: %s, %s in %s: %s' % (plural(report.errors, 'error'),
