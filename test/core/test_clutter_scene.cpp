@@ -84,8 +84,7 @@ TEST(ClutterScene, YcbSceneOfEighteenObjects) {
   if (!test::haveYcb()) GTEST_SKIP() << "YCB-Video models not found at " << test::ycbDir();
   ModelSet models;
   std::vector<std::string> errors;
-  ASSERT_TRUE(ModelSet::load(std::string(GEOFUSION_SOURCE_DIR) + "/config/models/ycb_video.yaml",
-                             test::ycbDir(), &models, &errors));
+  ASSERT_TRUE(test::loadYcbModels(&models, &errors));
   ClutterConfig config;
   config.num_objects = 18;
   ClutterScene scene;

@@ -218,8 +218,7 @@ TEST(Consistency, YcbMeshesTruePoseHighPerturbedAndWrongClassClearlyLower) {
   if (!test::haveYcb()) GTEST_SKIP() << "YCB-Video models not found at " << test::ycbDir();
   ModelSet models;
   std::vector<std::string> errors;
-  ASSERT_TRUE(ModelSet::load(std::string(GEOFUSION_SOURCE_DIR) + "/config/models/ycb_video.yaml",
-                             test::ycbDir(), &models, &errors));
+  ASSERT_TRUE(test::loadYcbModels(&models, &errors));
   checkScene(models, "003_cracker_box", "005_tomato_soup_can", "004_sugar_box",
              "002_master_chef_can");
 }

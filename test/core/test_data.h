@@ -2,6 +2,8 @@
 // beside the repository. They are licensed data and never copied into the repository.
 #pragma once
 
+#include "geofusion/core/object_model.h"
+
 #include <cstdlib>
 #include <fstream>
 #include <string>
@@ -25,6 +27,12 @@ inline bool anyMentions(const std::vector<std::string>& messages, const std::str
 
 inline bool haveYcb() {
   return std::ifstream(ycbDir() + "/classes.txt").good();
+}
+
+/// Loads the YCB-Video model set (config/models/ycb_video.yaml) from ycbDir().
+inline bool loadYcbModels(ModelSet* models, std::vector<std::string>* errors) {
+  return ModelSet::load(std::string(GEOFUSION_SOURCE_DIR) + "/config/models/ycb_video.yaml",
+                        ycbDir(), models, errors);
 }
 
 }  // namespace test

@@ -108,8 +108,7 @@ TEST(ModelSet, YcbVideoSetLoadsWithTheOfficialPoints) {
   if (!test::haveYcb()) GTEST_SKIP() << "YCB-Video models not found at " << test::ycbDir();
   ModelSet set;
   std::vector<std::string> errors;
-  ASSERT_TRUE(ModelSet::load(std::string(GEOFUSION_SOURCE_DIR) + "/config/models/ycb_video.yaml",
-                             test::ycbDir(), &set, &errors));
+  ASSERT_TRUE(test::loadYcbModels(&set, &errors));
   EXPECT_TRUE(errors.empty()) << errors.front();
   ASSERT_EQ(set.size(), 21u);
   for (int id = 1; id <= 21; ++id) {
