@@ -306,7 +306,7 @@ bool makeClutterScene(const ModelSet& models, const ClutterConfig& config, unsig
     T.linear() = R;
     const Eigen::Vector3d centre = (0.5f * (lo + hi)).cast<double>();
     T.translation() = Eigen::Vector3d(xy.x(), xy.y(), floor_z + radius + 0.005) - R * centre;
-    const int body = physics.add(*model, T);
+    physics.add(*model, T);
     placed.push_back(model);
     physics.settle(4.0);
     // Anything that left the table top is taken out (and another object is tried).
@@ -319,7 +319,6 @@ bool makeClutterScene(const ModelSet& models, const ClutterConfig& config, unsig
         ++scene->dropped_off_table;
       }
     }
-    (void)body;
   }
   physics.settle(3.0);
   for (std::size_t k = 0; k < physics.size(); ++k)

@@ -131,9 +131,21 @@ std::vector<FeatureContact> findContacts(const std::vector<PosedModel>& objects,
   const auto planes_a = worldPlanes(objects[a]), planes_b = worldPlanes(objects[b]);
   const auto curves_a = worldCurves(objects[a]), curves_b = worldCurves(objects[b]);
 
-  // Orients a candidate (normal from i to j), applies the checks, and keeps it.
-  auto accept = [&](FeatureContact c, const std::vector<Eigen::Vector3d>& outline_i,
+  // Makes a candidate between objects i and j (normal from i to j), applies the support and
+  // projection checks, and keeps it.
+  auto accept = [&](int i, int j, ContactType type, FeatureRef fi, FeatureRef fj,
+                    const Eigen::Vector3d& normal, double dir, double dist,
+                    const std::vector<Eigen::Vector3d>& outline_i,
                     const std::vector<Eigen::Vector3d>& outline_j) {
+    FeatureContact c;
+    c.object_a = i;
+    c.object_b = j;
+    c.type = type;
+    c.feature_a = fi;
+    c.feature_b = fj;
+    c.normal = normal;
+    c.direction_residual = dir;
+    c.distance_residual = dist;
     const double vertical = c.normal.dot(up);
     c.support = std::abs(vertical) > cfg.eps_g;
     if (cfg.support_only && !c.support) return;
@@ -155,16 +167,8 @@ std::vector<FeatureContact> findContacts(const std::vector<PosedModel>& objects,
       const double dir = std::abs(pu.normal.dot(pv.normal) + 1.0);
       const double dist = pu.normal.dot(pv.center - pu.center);
       if (dir >= cfg.eps_n_pp || std::abs(dist) >= cfg.eps_c_pp) continue;
-      FeatureContact c;
-      c.object_a = a;
-      c.object_b = b;
-      c.type = ContactType::kPlanePlane;
-      c.feature_a = {true, static_cast<int>(u)};
-      c.feature_b = {true, static_cast<int>(v)};
-      c.normal = pu.normal;
-      c.direction_residual = dir;
-      c.distance_residual = dist;
-      accept(c, pu.boundary, pv.boundary);
+      accept(a, b, ContactType::kPlanePlane, {true, static_cast<int>(u)},
+             {true, static_cast<int>(v)}, pu.normal, dir, dist, pu.boundary, pv.boundary);
     }
   }
   if (!out.empty()) return out;
@@ -179,16 +183,8 @@ std::vector<FeatureContact> findContacts(const std::vector<PosedModel>& objects,
         const double dir = std::abs(p.normal.dot(k.axis));
         const double dist = p.normal.dot(k.center - p.center) - k.radius;
         if (dir >= cfg.eps_n_pc || std::abs(dist) >= cfg.eps_c_pc) continue;
-        FeatureContact c;
-        c.object_a = plane_obj;
-        c.object_b = curve_obj;
-        c.type = ContactType::kPlaneCurve;
-        c.feature_a = {true, static_cast<int>(u)};
-        c.feature_b = {false, static_cast<int>(v)};
-        c.normal = p.normal;
-        c.direction_residual = dir;
-        c.distance_residual = dist;
-        accept(c, p.boundary, {k.end_a, k.end_b});
+        accept(plane_obj, curve_obj, ContactType::kPlaneCurve, {true, static_cast<int>(u)},
+               {false, static_cast<int>(v)}, p.normal, dir, dist, p.boundary, {k.end_a, k.end_b});
       }
     }
   };
@@ -212,16 +208,9 @@ std::vector<FeatureContact> findContacts(const std::vector<PosedModel>& objects,
       if (n.dot(d) < 0) n = -n;
       const double dist = n.dot(d) - (cu.radius + cv.radius);
       if (std::abs(dist) >= cfg.eps_c_cc) continue;
-      FeatureContact c;
-      c.object_a = a;
-      c.object_b = b;
-      c.type = ContactType::kCurveCurve;
-      c.feature_a = {false, static_cast<int>(u)};
-      c.feature_b = {false, static_cast<int>(v)};
-      c.normal = n;
-      c.direction_residual = 0.0;
-      c.distance_residual = dist;
-      accept(c, {cu.end_a, cu.end_b}, {cv.end_a, cv.end_b});
+      accept(a, b, ContactType::kCurveCurve, {false, static_cast<int>(u)},
+             {false, static_cast<int>(v)}, n, 0.0, dist, {cu.end_a, cu.end_b},
+             {cv.end_a, cv.end_b});
     }
   }
   return out;

@@ -111,10 +111,10 @@ void addOdometryDrift(std::vector<FramePose>* poses, const OdometryNoise& noise,
     const double dist = delta.translation().head<2>().norm();
     const double turn = yawOf(delta);
     const double yaw_error =
-        yaw_bias * dist + noise.yaw_rad_per_rad * std::sqrt(std::abs(turn)) * gauss(rng) * 0.2;
+        yaw_bias * dist + noise.yaw_rad_per_sqrt_rad * std::sqrt(std::abs(turn)) * gauss(rng);
     const Eigen::Vector2d t =
-        scale * delta.translation().head<2>() + noise.translation_fraction * std::sqrt(dist) *
-                                                    0.05 * Eigen::Vector2d(gauss(rng), gauss(rng));
+        scale * delta.translation().head<2>() +
+        noise.translation_m_per_sqrt_m * std::sqrt(dist) * Eigen::Vector2d(gauss(rng), gauss(rng));
     odom = odom * planar(t.x(), t.y(), turn + yaw_error);
     (*poses)[k].T_odom_base = odom;
   }

@@ -7,6 +7,7 @@
 //       [--depth-encoding 32FC1|16UC1] [--detection-stamp-offset 0]
 #include "geofusion/core/box_scene.h"
 #include "geofusion/core/frame_by_frame.h"
+#include "geofusion/core/sequence.h"
 #include "geofusion/ros/conversions.h"
 
 #include <geofusion/DetectionArray.h>
@@ -153,8 +154,7 @@ int main(int argc, char** argv) {
   Eigen::Isometry3d T_base_link = Eigen::Isometry3d::Identity();
   T_base_link.translation() = Eigen::Vector3d(0.05, 0.0, 1.35);
   T_base_link.linear() = Eigen::AngleAxisd(0.55, Eigen::Vector3d::UnitY()).toRotationMatrix();
-  Eigen::Isometry3d T_link_optical = Eigen::Isometry3d::Identity();
-  T_link_optical.linear() = Eigen::Quaterniond(0.5, -0.5, 0.5, -0.5).toRotationMatrix();
+  const Eigen::Isometry3d T_link_optical = RobotGeometry::cameraLinkToOptical();
 
   rosbag::Bag bag;
   try {

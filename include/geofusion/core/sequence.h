@@ -51,9 +51,12 @@ std::vector<FramePose> makeTrajectory(const ClutterScene& scene, const Trajector
                                       unsigned seed);
 
 struct OdometryNoise {
-  double translation_fraction = 0.006;  ///< std of the scale error of travelled distance
-  double yaw_rad_per_m = 0.006;         ///< std of the heading bias per metre travelled
-  double yaw_rad_per_rad = 0.004;       ///< std of the heading error per radian turned
+  /// Systematic, drawn once a sequence: std of the scale error of travelled distance ...
+  double translation_fraction = 0.006;
+  double yaw_rad_per_m = 0.006;  ///< ... and of the heading bias per metre travelled.
+  /// Random, each step: std of the position error (random walk, grows with sqrt(distance)) ...
+  double translation_m_per_sqrt_m = 0.0003;
+  double yaw_rad_per_sqrt_rad = 0.0008;  ///< ... and of the heading error per sqrt(radian) turned.
 };
 
 /// Fills T_odom_base by integrating the ground-truth increments with noise (odom = map at the
