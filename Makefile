@@ -1,10 +1,11 @@
 # GeoFusion: the two commands a user needs.
 #   make demo   install what is missing, build, and run the demo
 #   make test   install what is missing, build, and run every test (exit code = result)
-.PHONY: demo test deps build lint clean help
+#   make data SUITE=demo|bench   generate (or reuse) a data suite in ~/.cache/geofusion/data
+.PHONY: demo test data deps build lint clean help
 
 help:
-	@sed -n '2,4p' Makefile
+	@sed -n '2,5p' Makefile
 
 deps:
 	@bash scripts/install_deps.sh
@@ -17,6 +18,9 @@ test: build
 
 demo: build
 	@bash scripts/demo.sh
+
+data: build
+	@bash scripts/data.sh
 
 lint:
 	@bash scripts/lint.sh

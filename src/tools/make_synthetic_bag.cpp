@@ -8,16 +8,7 @@
 #include "geofusion/core/box_scene.h"
 #include "geofusion/core/frame_by_frame.h"
 #include "geofusion/core/sequence.h"
-#include "geofusion/ros/conversions.h"
-
-#include <geofusion/DetectionArray.h>
-#include <nav_msgs/Odometry.h>
-#include <rosbag/bag.h>
-#include <sensor_msgs/CameraInfo.h>
-#include <sensor_msgs/Image.h>
-#include <sensor_msgs/image_encodings.h>
-#include <tf2_eigen/tf2_eigen.h>
-#include <tf2_msgs/TFMessage.h>
+#include "geofusion/ros/recording_writer.h"
 
 #include <cmath>
 #include <cstdio>
@@ -94,15 +85,6 @@ Options parse(int argc, char** argv) {
   return o;
 }
 
-geometry_msgs::TransformStamped transform(const Eigen::Isometry3d& T, const ros::Time& stamp,
-                                          const std::string& parent, const std::string& child) {
-  geometry_msgs::TransformStamped t = tf2::eigenToTransform(T);
-  t.header.stamp = stamp;
-  t.header.frame_id = parent;
-  t.child_frame_id = child;
-  return t;
-}
-
 std::string vec(const Eigen::Vector3d& v) {
   char b[96];
   std::snprintf(b, sizeof(b), "[%.6f, %.6f, %.6f]", v.x(), v.y(), v.z());
@@ -143,8 +125,6 @@ int main(int argc, char** argv) {
     return 2;
   }
   using namespace geofusion;
-  const std::string odom = "odom", base = "base_link", cam_link = "head_camera_link",
-                    optical = "head_camera_rgb_optical_frame";
   const BoxScene scene = BoxScene::demoScene();
   const PinholeIntrinsics K;
   std::mt19937 rng(opt.seed);
@@ -156,11 +136,12 @@ int main(int argc, char** argv) {
   T_base_link.linear() = Eigen::AngleAxisd(0.55, Eigen::Vector3d::UnitY()).toRotationMatrix();
   const Eigen::Isometry3d T_link_optical = RobotGeometry::cameraLinkToOptical();
 
-  rosbag::Bag bag;
-  try {
-    bag.open(opt.out, rosbag::bagmode::Write);
-  } catch (const std::exception& e) {
-    std::cerr << "make_synthetic_bag: cannot write " << opt.out << ": " << e.what() << "\n";
+  RecordingLayout layout;
+  layout.depth_encoding = opt.depth_encoding;
+  RecordingWriter bag;
+  std::string error;
+  if (!bag.open(opt.out, layout, &error)) {
+    std::cerr << "make_synthetic_bag: " << error << "\n";
     return 1;
   }
   std::ofstream gt(opt.ground_truth);
@@ -170,16 +151,11 @@ int main(int argc, char** argv) {
   }
 
   const ros::Time t0(1600000000.0);
-  {
-    tf2_msgs::TFMessage statics;
-    statics.transforms.push_back(transform(T_base_link, t0, base, cam_link));
-    statics.transforms.push_back(transform(T_link_optical, t0, cam_link, optical));
-    bag.write("/tf_static", t0, statics);
-  }
+  bag.writeStaticTransforms(t0, T_link_optical, &T_base_link);
 
   gt << "# Ground truth of a make_synthetic_bag recording. Poses: position [x, y, z] m,\n"
         "# orientation [x, y, z, w]; world frame = odom (this recording has no drift).\n";
-  gt << "frame_id: " << odom << "\ncamera_frame: " << optical << "\n";
+  gt << "frame_id: " << layout.odom_frame << "\ncamera_frame: " << layout.optical_frame << "\n";
   gt << "intrinsics: {width: " << K.width << ", height: " << K.height << ", fx: " << K.fx
      << ", fy: " << K.fy << ", cx: " << K.cx << ", cy: " << K.cy << "}\n";
   gt << "objects:\n";
@@ -205,72 +181,17 @@ int main(int argc, char** argv) {
         Eigen::AngleAxisd(theta + M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     const Eigen::Isometry3d T_odom_cam = T_odom_base * T_base_link * T_link_optical;
 
-    if (opt.tf_until < 0 || k <= opt.tf_until) {
-      tf2_msgs::TFMessage tf;
-      tf.transforms.push_back(transform(T_odom_base, stamp, odom, base));
-      bag.write("/tf", stamp, tf);
-    }
-    nav_msgs::Odometry odom_msg;
-    odom_msg.header.stamp = stamp;
-    odom_msg.header.frame_id = odom;
-    odom_msg.child_frame_id = base;
-    odom_msg.pose.pose = toPoseMsg(T_odom_base);
-    bag.write("/odom", stamp, odom_msg);
-
+    if (opt.tf_until < 0 || k <= opt.tf_until) bag.writeTransforms(stamp, T_odom_base);
+    bag.writeOdometry(stamp, T_odom_base);
     const RenderedFrame frame = scene.render(K, T_odom_cam);
-    sensor_msgs::Image rgb;
-    rgb.header.stamp = stamp;
-    rgb.header.frame_id = optical;
-    rgb.width = K.width;
-    rgb.height = K.height;
-    rgb.encoding = sensor_msgs::image_encodings::RGB8;
-    rgb.step = 3 * K.width;
-    rgb.data = frame.rgb;
-    bag.write("/head_camera/rgb/image_raw", stamp, rgb);
-
-    sensor_msgs::Image depth;
-    depth.header = rgb.header;
-    depth.width = K.width;
-    depth.height = K.height;
-    if (opt.depth_encoding == "32FC1") {
-      depth.encoding = sensor_msgs::image_encodings::TYPE_32FC1;
-      depth.step = 4 * K.width;
-      depth.data.resize(frame.depth.size() * 4);
-      std::memcpy(depth.data.data(), frame.depth.data(), depth.data.size());
-    } else {
-      depth.encoding = sensor_msgs::image_encodings::TYPE_16UC1;
-      depth.step = 2 * K.width;
-      std::vector<uint16_t> mm(frame.depth.size());
-      for (std::size_t i = 0; i < mm.size(); ++i) {
-        mm[i] = static_cast<uint16_t>(std::lround(std::min(frame.depth[i] * 1000.0, 65535.0)));
-      }
-      depth.data.resize(mm.size() * 2);
-      std::memcpy(depth.data.data(), mm.data(), depth.data.size());
-    }
-    bag.write("/head_camera/depth_registered/image_raw", stamp, depth);
-
-    sensor_msgs::CameraInfo info;
-    info.header = rgb.header;
-    info.width = K.width;
-    info.height = K.height;
-    info.distortion_model = "plumb_bob";
-    info.D.assign(5, 0.0);
-    info.K = {K.fx, 0, K.cx, 0, K.fy, K.cy, 0, 0, 1};
-    info.R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-    info.P = {K.fx, 0, K.cx, 0, 0, K.fy, K.cy, 0, 0, 0, 1, 0};
-    bag.write("/head_camera/rgb/camera_info", stamp, info);
-    bag.write("/head_camera/depth_registered/camera_info", stamp, info);
+    bag.writeImages(stamp, K, frame.rgb, frame.depth);
 
     std::vector<RawDetection> dets = synthesizeDetections(scene, frame, T_odom_cam, noise, rng);
     const std::size_t num_valid = dets.size();
     if (opt.malformed_every > 0 && k % opt.malformed_every == 0) {
       for (const RawDetection& bad : malformed()) dets.push_back(bad);
     }
-    geofusion::DetectionArray det_msg;
-    det_msg.header.stamp = stamp + ros::Duration(opt.detection_stamp_offset_s);
-    det_msg.header.frame_id = optical;
-    for (const RawDetection& d : dets) det_msg.detections.push_back(toMsg(d));
-    bag.write("/detections", stamp, det_msg);
+    bag.writeDetections(stamp + ros::Duration(opt.detection_stamp_offset_s), stamp, dets);
     total_detections += static_cast<int>(dets.size());
     total_malformed += static_cast<int>(dets.size() - num_valid);
 

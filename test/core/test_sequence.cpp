@@ -1,4 +1,5 @@
 // Sequences: trajectory, depth noise, detection noise calibration, odometry drift.
+#include "geofusion/core/dataset.h"
 #include "geofusion/core/metrics.h"
 #include "geofusion/core/sequence.h"
 
@@ -102,52 +103,27 @@ TEST_F(SequenceTest, FramesHaveNoisyDepthAndCalibratedDetections) {
   SequenceRenderer renderer(*scene_, PinholeIntrinsics());
   ASSERT_TRUE(renderer.ok());
   std::mt19937 rng(9);
-  std::vector<double> adds;
-  int detections = 0, false_positives = 0, holes = 0, valid = 0;
-  double noise_sq = 0.0;
+  SequenceCalibration calibration;
   for (const auto& pose : poses) {
     const SequenceFrame f =
         renderer.render(pose, DepthNoise(), DetectorModel::denseFusion(), *models_, rng);
     ASSERT_EQ(f.images.rgb.size(), 640u * 480u * 3u);
-    for (std::size_t p = 0; p < f.clean_depth.size(); ++p) {
-      if (f.clean_depth[p] <= 0.f || f.clean_depth[p] > 1.5f) continue;  // the table top
-      if (f.images.depth[p] <= 0.f) {
-        ++holes;
-        continue;
-      }
-      ++valid;
-      noise_sq += std::pow(f.images.depth[p] - f.clean_depth[p], 2);
-    }
-    for (std::size_t k = 0; k < f.detections.size(); ++k) {
-      ++detections;
-      const int truth = f.detection_truth[k];
-      if (truth < 0) {
-        ++false_positives;
-        continue;
-      }
-      const auto& o = scene_->objects[static_cast<std::size_t>(truth)];
-      const RawDetection& d = f.detections[k];
-      Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-      T.linear() = d.orientation_cam.normalized().toRotationMatrix();
-      T.translation() = d.position_cam;
-      const Eigen::Isometry3d T_true = pose.T_map_optical.inverse() * o.T_world_obj;
-      if (d.class_name == o.model->name) adds.push_back(addsError(o.model->points, T, T_true));
-    }
+    ASSERT_EQ(f.detections.size(), f.detection_truth.size());
+    calibration.add(*scene_, pose.T_map_optical, f);
   }
-  const double rms = std::sqrt(noise_sq / valid);
-  const double hole_share = static_cast<double>(holes) / (holes + valid);
-  const double auc = accuracyAuc(adds), below2 = shareBelow(adds, 0.02);
-  std::cout << detections << " detections, " << false_positives << " false positives; ADD-S AUC "
-            << auc << ", < 2 cm " << 100 * below2 << " %; depth noise rms " << rms * 1000
-            << " mm, holes " << 100 * hole_share << " %\n";
-  EXPECT_GT(detections, 150);
-  EXPECT_GT(false_positives, 2);
-  EXPECT_NEAR(auc, 93.0, 3.0);
-  EXPECT_NEAR(below2, 0.97, 0.03);
-  EXPECT_GT(rms, 0.001);
-  EXPECT_LT(rms, 0.006);
-  EXPECT_GT(hole_share, 0.005);
-  EXPECT_LT(hole_share, 0.15);
+  std::cout << calibration.report();
+  const auto all = calibration.overall();
+  EXPECT_GT(calibration.detections(), 150);
+  EXPECT_GT(calibration.falsePositives(), 2);
+  EXPECT_NEAR(all.auc, 93.0, 3.0);
+  EXPECT_NEAR(all.below_2cm, 0.97, 0.03);
+  // Misses grow with occlusion: some, not most.
+  EXPECT_GT(calibration.missed(), 0);
+  EXPECT_LT(calibration.missed(), calibration.detectable() / 3);
+  EXPECT_GT(calibration.depthNoiseRms(), 0.001);
+  EXPECT_LT(calibration.depthNoiseRms(), 0.006);
+  EXPECT_GT(calibration.holeShare(), 0.005);
+  EXPECT_LT(calibration.holeShare(), 0.15);
 }
 
 }  // namespace

@@ -1,0 +1,77 @@
+// Writes recordings with the topics and frames of a Fetch robot's head camera (REP-103/105):
+// RGB, registered depth (32FC1 metres or 16UC1 millimetres), camera_info, detections, odometry,
+// /tf and /tf_static. One implementation for every tool that writes bags (make_synthetic_bag,
+// generate_dataset).
+#pragma once
+
+#include "geofusion/core/camera.h"
+#include "geofusion/core/measurement.h"
+
+#include <ros/time.h>
+#include <Eigen/Geometry>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace rosbag {
+class Bag;
+}
+
+namespace geofusion {
+
+struct RecordingLayout {
+  std::string rgb_topic = "/head_camera/rgb/image_raw";
+  std::string rgb_info_topic = "/head_camera/rgb/camera_info";
+  std::string depth_topic = "/head_camera/depth_registered/image_raw";
+  std::string depth_info_topic = "/head_camera/depth_registered/camera_info";
+  std::string detections_topic = "/detections";
+  std::string odom_topic = "/odom";
+  std::string odom_frame = "odom";
+  std::string base_frame = "base_link";
+  std::string camera_link_frame = "head_camera_link";
+  std::string optical_frame = "head_camera_rgb_optical_frame";
+  std::string depth_encoding = "32FC1";  ///< or 16UC1 (millimetres, 0 = no reading)
+  bool lz4 = false;                      ///< LZ4-compressed bag chunks
+};
+
+class RecordingWriter {
+ public:
+  RecordingWriter();
+  ~RecordingWriter();
+  RecordingWriter(const RecordingWriter&) = delete;
+  RecordingWriter& operator=(const RecordingWriter&) = delete;
+
+  /// False with `error` set when the file cannot be written or the layout is invalid.
+  bool open(const std::string& path, const RecordingLayout& layout, std::string* error);
+  void close();
+  const RecordingLayout& layout() const { return layout_; }
+
+  /// /tf_static: head_camera_link -> optical frame (and base -> head_camera_link when the head
+  /// does not move).
+  void writeStaticTransforms(const ros::Time& stamp, const Eigen::Isometry3d& T_link_optical,
+                             const Eigen::Isometry3d* T_base_link = nullptr);
+  /// /tf: odom -> base_link and, when given, the moving head base_link -> head_camera_link.
+  void writeTransforms(const ros::Time& stamp, const Eigen::Isometry3d& T_odom_base,
+                       const Eigen::Isometry3d* T_base_link = nullptr);
+  /// nav_msgs/Odometry; twist from the previous call's pose (in the child frame), covariances
+  /// of a wheel odometry (documented in docs/dataset.md).
+  void writeOdometry(const ros::Time& stamp, const Eigen::Isometry3d& T_odom_base);
+  /// RGB (rgb8, 3 bytes a pixel), registered depth in metres (0 = no reading) and both
+  /// camera_infos, all stamped `stamp` in the optical frame.
+  void writeImages(const ros::Time& stamp, const PinholeIntrinsics& K,
+                   const std::vector<std::uint8_t>& rgb, const std::vector<float>& depth);
+  /// DetectionArray in the optical frame; header stamp `stamp`, written at `write_time`.
+  void writeDetections(const ros::Time& stamp, const ros::Time& write_time,
+                       const std::vector<RawDetection>& detections);
+
+ private:
+  std::unique_ptr<rosbag::Bag> bag_;
+  RecordingLayout layout_;
+  bool have_previous_odom_ = false;
+  ros::Time previous_stamp_;
+  Eigen::Isometry3d previous_odom_ = Eigen::Isometry3d::Identity();
+};
+
+}  // namespace geofusion

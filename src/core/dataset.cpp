@@ -1,0 +1,460 @@
+#include "geofusion/core/dataset.h"
+
+#include "geofusion/core/metrics.h"
+
+#include <yaml-cpp/yaml.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace geofusion {
+
+bool suiteByName(const std::string& name, SuiteSpec* suite) {
+  SuiteSpec s;
+  s.name = name;
+  if (name == "demo") {
+    s.model_set = "primitives";
+    s.scenes = {{"demo_01", 7, 10}};
+    s.keyframes = 60;
+    s.clutter.area_x_m = 0.36;
+    s.clutter.area_y_m = 0.26;
+  } else if (name == "bench") {
+    // Six scenes of 16-20 objects (mean 18), as the paper's data set.
+    s.model_set = "ycb_video";
+    s.scenes = {{"bench_01", 101, 18}, {"bench_02", 102, 16}, {"bench_03", 103, 20},
+                {"bench_04", 104, 17}, {"bench_05", 105, 19}, {"bench_06", 106, 18}};
+    s.keyframes = 200;
+    s.clutter.area_x_m = 0.45;
+    s.clutter.area_y_m = 0.34;
+  } else {
+    return false;
+  }
+  s.trajectory.frames = s.cameraFrames();
+  s.trajectory.rate_hz = s.camera_rate_hz;
+  *suite = s;
+  return true;
+}
+
+std::vector<std::string> suiteNames() {
+  return {"demo", "bench"};
+}
+
+bool makeSuiteScene(const SuiteSpec& suite, const SceneSpec& spec, const ModelSet& models,
+                    ClutterScene* scene, unsigned* used_seed, std::string* report, int attempts) {
+  ClutterConfig clutter = suite.clutter;
+  clutter.num_objects = spec.num_objects;
+  std::string reasons;
+  for (int a = 0; a < attempts; ++a) {
+    const unsigned seed = spec.seed + 7919u * static_cast<unsigned>(a);
+    std::string why;
+    if (makeClutterScene(models, clutter, seed, scene, &why)) {
+      if (used_seed) *used_seed = seed;
+      return true;
+    }
+    reasons += (reasons.empty() ? "" : "; ") + ("seed " + std::to_string(seed) + ": " + why);
+  }
+  if (report) *report = reasons;
+  return false;
+}
+
+// --------------------------------------------------------------------------------------------
+// Ground-truth YAML.
+namespace {
+
+void emitPose(YAML::Emitter& out, const char* key, const Eigen::Isometry3d& T) {
+  const Eigen::Quaterniond q(T.linear());
+  const Eigen::Vector3d& t = T.translation();
+  out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq << t.x() << t.y() << t.z()
+      << q.x() << q.y() << q.z() << q.w() << YAML::EndSeq;
+}
+
+Eigen::Isometry3d parsePose(const YAML::Node& n, const char* what) {
+  if (!n || !n.IsSequence() || n.size() != 7) {
+    throw std::runtime_error(std::string(what) + ": expected [x, y, z, qx, qy, qz, qw]");
+  }
+  Eigen::Quaterniond q(n[6].as<double>(), n[3].as<double>(), n[4].as<double>(), n[5].as<double>());
+  if (!(std::abs(q.norm() - 1.0) < 1e-3)) {
+    throw std::runtime_error(std::string(what) + ": quaternion is not unit");
+  }
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = q.normalized().toRotationMatrix();
+  T.translation() = Eigen::Vector3d(n[0].as<double>(), n[1].as<double>(), n[2].as<double>());
+  if (!T.matrix().allFinite()) throw std::runtime_error(std::string(what) + ": not finite");
+  return T;
+}
+
+const char* contactKey(ContactType t) {
+  switch (t) {
+    case ContactType::kPlanePlane: return "P2P";
+    case ContactType::kPlaneCurve: return "P2C";
+    default: return "C2C";
+  }
+}
+
+ContactType parseContactType(const std::string& s) {
+  if (s == "P2P") return ContactType::kPlanePlane;
+  if (s == "P2C") return ContactType::kPlaneCurve;
+  if (s == "C2C") return ContactType::kCurveCurve;
+  throw std::runtime_error("unknown contact type '" + s + "'");
+}
+
+std::string featureKey(const FeatureRef& f) {
+  return std::string(f.plane ? "plane " : "curve ") + std::to_string(f.index);
+}
+
+FeatureRef parseFeature(const std::string& s) {
+  FeatureRef f;
+  std::istringstream in(s);
+  std::string kind;
+  in >> kind >> f.index;
+  if (!in || (kind != "plane" && kind != "curve")) {
+    throw std::runtime_error("feature '" + s + "' is not 'plane N' or 'curve N'");
+  }
+  f.plane = kind == "plane";
+  return f;
+}
+
+}  // namespace
+
+bool writeGroundTruth(const std::string& path, const GroundTruth& gt, std::string* error) {
+  YAML::Emitter out;
+  out.SetDoublePrecision(12);  // significant digits
+  out << YAML::BeginMap;
+  out << YAML::Key << "format" << YAML::Value << "geofusion_ground_truth_v1";
+  out << YAML::Key << "suite" << YAML::Value << gt.suite;
+  out << YAML::Key << "scene" << YAML::Value << gt.scene_name;
+  out << YAML::Key << "seed" << YAML::Value << gt.seed;
+  out << YAML::Key << "scene_seed" << YAML::Value << gt.scene_seed;
+  out << YAML::Key << "model_set" << YAML::Value << gt.model_set;
+  out << YAML::Key << "detector" << YAML::Value << gt.detector;
+  out << YAML::Key << "frame_ids" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  out << YAML::Key << "map" << YAML::Value << gt.map_frame;
+  out << YAML::Key << "odom" << YAML::Value << gt.odom_frame;
+  out << YAML::Key << "base" << YAML::Value << gt.base_frame;
+  out << YAML::Key << "camera_link" << YAML::Value << gt.camera_link_frame;
+  out << YAML::Key << "camera" << YAML::Value << gt.camera_frame << YAML::EndMap;
+  const PinholeIntrinsics& K = gt.intrinsics;
+  out << YAML::Key << "intrinsics" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  out << YAML::Key << "width" << YAML::Value << K.width << YAML::Key << "height" << YAML::Value
+      << K.height << YAML::Key << "fx" << YAML::Value << K.fx << YAML::Key << "fy" << YAML::Value
+      << K.fy << YAML::Key << "cx" << YAML::Value << K.cx << YAML::Key << "cy" << YAML::Value
+      << K.cy << YAML::EndMap;
+  const TableSpec& table = gt.scene.table;
+  out << YAML::Key << "table" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  out << YAML::Key << "height" << YAML::Value << table.height_m;
+  out << YAML::Key << "size" << YAML::Value << YAML::Flow << YAML::BeginSeq << table.size_x_m
+      << table.size_y_m << table.thickness_m << YAML::EndSeq << YAML::EndMap;
+  out << YAML::Key << "objects" << YAML::Value << YAML::BeginSeq;
+  for (std::size_t i = 0; i < gt.scene.objects.size(); ++i) {
+    const SceneObject& o = gt.scene.objects[i];
+    out << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "index" << YAML::Value << i;
+    out << YAML::Key << "class_name" << YAML::Value << o.model->name;
+    out << YAML::Key << "class_id" << YAML::Value << o.model->id;
+    emitPose(out, "pose", o.T_world_obj);
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+  out << YAML::Key << "max_penetration_m" << YAML::Value << gt.scene.max_penetration_m;
+  out << YAML::Key << "contacts" << YAML::Value << YAML::BeginSeq;
+  for (const FeatureContact& c : gt.scene.contacts) {
+    out << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "a" << YAML::Value << c.object_a;
+    out << YAML::Key << "b" << YAML::Value << c.object_b;
+    out << YAML::Key << "type" << YAML::Value << contactKey(c.type);
+    out << YAML::Key << "feature_a" << YAML::Value << featureKey(c.feature_a);
+    out << YAML::Key << "feature_b" << YAML::Value << featureKey(c.feature_b);
+    out << YAML::Key << "support" << YAML::Value << c.support;
+    out << YAML::Key << "normal" << YAML::Value << YAML::Flow << YAML::BeginSeq << c.normal.x()
+        << c.normal.y() << c.normal.z() << YAML::EndSeq;
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+  out << YAML::Key << "frames" << YAML::Value << YAML::BeginSeq;
+  for (const GroundTruthFrame& f : gt.frames) {
+    out << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "index" << YAML::Value << f.index;
+    char stamp[32];
+    std::snprintf(stamp, sizeof(stamp), "%.9f", f.stamp_s);
+    out << YAML::Key << "stamp" << YAML::Value << stamp;
+    out << YAML::Key << "keyframe" << YAML::Value << f.keyframe;
+    emitPose(out, "map_base", f.T_map_base);
+    emitPose(out, "odom_base", f.T_odom_base);
+    emitPose(out, "base_camera_link", f.T_base_link);
+    emitPose(out, "map_camera", f.T_map_optical);
+    if (f.keyframe) {
+      out << YAML::Key << "visible_fraction" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+      for (double v : f.visible_fraction) {
+        out << std::round(v * 1000.0) / 1000.0;
+      }
+      out << YAML::EndSeq;
+      out << YAML::Key << "visible_pixels" << YAML::Value << YAML::Flow << f.visible_pixels;
+      out << YAML::Key << "detection_truth" << YAML::Value << YAML::Flow << f.detection_truth;
+    }
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq << YAML::EndMap;
+  if (!out.good()) {
+    if (error) *error = "YAML emitter: " + out.GetLastError();
+    return false;
+  }
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream file(tmp);
+    file << "# GeoFusion ground truth (docs/dataset.md). Poses [x, y, z, qx, qy, qz, qw], metres;\n"
+            "# T_a_b maps b coordinates into a; map = world, z up, origin on the floor.\n"
+         << out.c_str() << "\n";
+    if (!file.good()) {
+      if (error) *error = "cannot write " + tmp;
+      return false;
+    }
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    if (error) *error = "cannot rename " + tmp + " to " + path;
+    return false;
+  }
+  return true;
+}
+
+bool readGroundTruth(const std::string& path, const ModelSet& models, GroundTruth* gt,
+                     std::string* error) {
+  try {
+    const YAML::Node root = YAML::LoadFile(path);
+    if (root["format"].as<std::string>("") != "geofusion_ground_truth_v1") {
+      throw std::runtime_error("not a geofusion_ground_truth_v1 file");
+    }
+    GroundTruth g;
+    g.suite = root["suite"].as<std::string>("");
+    g.scene_name = root["scene"].as<std::string>("");
+    g.seed = root["seed"].as<unsigned>(0);
+    g.scene_seed = root["scene_seed"].as<unsigned>(0);
+    g.model_set = root["model_set"].as<std::string>("");
+    g.detector = root["detector"].as<std::string>("");
+    const YAML::Node ids = root["frame_ids"];
+    g.map_frame = ids["map"].as<std::string>();
+    g.odom_frame = ids["odom"].as<std::string>();
+    g.base_frame = ids["base"].as<std::string>();
+    g.camera_link_frame = ids["camera_link"].as<std::string>();
+    g.camera_frame = ids["camera"].as<std::string>();
+    const YAML::Node k = root["intrinsics"];
+    g.intrinsics.width = k["width"].as<int>();
+    g.intrinsics.height = k["height"].as<int>();
+    g.intrinsics.fx = k["fx"].as<double>();
+    g.intrinsics.fy = k["fy"].as<double>();
+    g.intrinsics.cx = k["cx"].as<double>();
+    g.intrinsics.cy = k["cy"].as<double>();
+    const YAML::Node table = root["table"];
+    g.scene.table.height_m = table["height"].as<double>();
+    g.scene.table.size_x_m = table["size"][0].as<double>();
+    g.scene.table.size_y_m = table["size"][1].as<double>();
+    g.scene.table.thickness_m = table["size"][2].as<double>();
+    for (const YAML::Node& o : root["objects"]) {
+      const std::string name = o["class_name"].as<std::string>();
+      const ObjectModel* model = models.find(name);
+      if (!model) throw std::runtime_error("class '" + name + "' is not in the model set");
+      SceneObject obj;
+      for (const auto& m : models.models())
+        if (m.get() == model) obj.model = m;
+      obj.T_world_obj = parsePose(o["pose"], "object pose");
+      g.scene.objects.push_back(obj);
+    }
+    g.scene.max_penetration_m = root["max_penetration_m"].as<double>(0.0);
+    const int n = static_cast<int>(g.scene.objects.size());
+    for (const YAML::Node& c : root["contacts"]) {
+      FeatureContact fc;
+      fc.object_a = c["a"].as<int>();
+      fc.object_b = c["b"].as<int>();
+      if (fc.object_a < -1 || fc.object_a >= n || fc.object_b < -1 || fc.object_b >= n) {
+        throw std::runtime_error("contact refers to an object that does not exist");
+      }
+      fc.type = parseContactType(c["type"].as<std::string>());
+      fc.feature_a = parseFeature(c["feature_a"].as<std::string>());
+      fc.feature_b = parseFeature(c["feature_b"].as<std::string>());
+      fc.support = c["support"].as<bool>();
+      const YAML::Node nn = c["normal"];
+      fc.normal = Eigen::Vector3d(nn[0].as<double>(), nn[1].as<double>(), nn[2].as<double>());
+      g.scene.contacts.push_back(fc);
+    }
+    for (const YAML::Node& f : root["frames"]) {
+      GroundTruthFrame fr;
+      fr.index = f["index"].as<int>();
+      fr.stamp_s = f["stamp"].as<double>();
+      fr.keyframe = f["keyframe"].as<bool>();
+      fr.T_map_base = parsePose(f["map_base"], "map_base");
+      fr.T_odom_base = parsePose(f["odom_base"], "odom_base");
+      fr.T_base_link = parsePose(f["base_camera_link"], "base_camera_link");
+      fr.T_map_optical = parsePose(f["map_camera"], "map_camera");
+      if (fr.keyframe) {
+        fr.visible_fraction = f["visible_fraction"].as<std::vector<double>>();
+        fr.visible_pixels = f["visible_pixels"].as<std::vector<int>>();
+        fr.detection_truth = f["detection_truth"].as<std::vector<int>>();
+        if (static_cast<int>(fr.visible_fraction.size()) != n ||
+            static_cast<int>(fr.visible_pixels.size()) != n) {
+          throw std::runtime_error("frame " + std::to_string(fr.index) +
+                                   ": visibility lists do not have one entry an object");
+        }
+      }
+      g.frames.push_back(std::move(fr));
+    }
+    *gt = std::move(g);
+    return true;
+  } catch (const std::exception& e) {
+    if (error) *error = path + ": " + e.what();
+    return false;
+  }
+}
+
+// --------------------------------------------------------------------------------------------
+void SequenceCalibration::add(const ClutterScene& scene, const Eigen::Isometry3d& T_map_optical,
+                              const SequenceFrame& frame) {
+  std::vector<bool> detected(scene.objects.size(), false);
+  for (std::size_t k = 0; k < frame.detections.size(); ++k) {
+    ++detections_;
+    const int truth = frame.detection_truth[k];
+    if (truth < 0) {
+      ++false_positives_;
+      continue;
+    }
+    const SceneObject& o = scene.objects[static_cast<std::size_t>(truth)];
+    const RawDetection& d = frame.detections[k];
+    detected[static_cast<std::size_t>(truth)] = true;
+    if (d.class_name != o.model->name) {
+      ++swaps_;
+      continue;
+    }
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = d.orientation_cam.normalized().toRotationMatrix();
+    T.translation() = d.position_cam;
+    const Eigen::Isometry3d T_true = T_map_optical.inverse() * o.T_world_obj;
+    adds_[o.model->name].push_back(addsError(o.model->points, T, T_true));
+  }
+  for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+    if (frame.visible_pixels[i] < min_visible_pixels_) continue;
+    ++detectable_;
+    if (!detected[i]) ++missed_;
+  }
+  for (std::size_t p = 0; p < frame.clean_depth.size() && p < frame.images.depth.size(); ++p) {
+    const float clean = frame.clean_depth[p];
+    if (clean <= 0.f || clean > max_depth_m_) continue;
+    if (frame.images.depth[p] <= 0.f) {
+      ++depth_holes_;
+      continue;
+    }
+    ++depth_valid_;
+    depth_sq_sum_ += std::pow(static_cast<double>(frame.images.depth[p]) - clean, 2);
+  }
+}
+
+double SequenceCalibration::depthNoiseRms() const {
+  return depth_valid_ > 0 ? std::sqrt(depth_sq_sum_ / static_cast<double>(depth_valid_)) : 0.0;
+}
+
+double SequenceCalibration::holeShare() const {
+  const long all = depth_valid_ + depth_holes_;
+  return all > 0 ? static_cast<double>(depth_holes_) / static_cast<double>(all) : 0.0;
+}
+
+std::map<std::string, SequenceCalibration::ClassStats> SequenceCalibration::perClass() const {
+  std::map<std::string, ClassStats> out;
+  for (const auto& kv : adds_) {
+    ClassStats s;
+    s.detections = static_cast<int>(kv.second.size());
+    s.auc = accuracyAuc(kv.second);
+    s.below_2cm = shareBelow(kv.second, 0.02);
+    out[kv.first] = s;
+  }
+  return out;
+}
+
+SequenceCalibration::ClassStats SequenceCalibration::overall() const {
+  std::vector<double> all;
+  for (const auto& kv : adds_) all.insert(all.end(), kv.second.begin(), kv.second.end());
+  ClassStats s;
+  s.detections = static_cast<int>(all.size());
+  s.auc = accuracyAuc(all);
+  s.below_2cm = shareBelow(all, 0.02);
+  return s;
+}
+
+std::string SequenceCalibration::report() const {
+  std::ostringstream out;
+  char line[200];
+  std::snprintf(line, sizeof(line), "  %-24s %6s %9s %8s\n", "class", "dets", "ADD-S AUC",
+                "< 2 cm");
+  out << line;
+  for (const auto& kv : perClass()) {
+    std::snprintf(line, sizeof(line), "  %-24s %6d %9.1f %7.1f%%\n", kv.first.c_str(),
+                  kv.second.detections, kv.second.auc, 100.0 * kv.second.below_2cm);
+    out << line;
+  }
+  const ClassStats all = overall();
+  std::snprintf(line, sizeof(line), "  %-24s %6d %9.1f %7.1f%%\n", "all (true class)",
+                all.detections, all.auc, 100.0 * all.below_2cm);
+  out << line;
+  std::snprintf(line, sizeof(line),
+                "  detections %d: false positives %d, class swaps %d; missed %d of %d detectable "
+                "objects (%.1f%%)\n",
+                detections_, false_positives_, swaps_, missed_, detectable_,
+                detectable_ > 0 ? 100.0 * missed_ / detectable_ : 0.0);
+  out << line;
+  std::snprintf(line, sizeof(line), "  depth noise rms %.2f mm, holes %.1f%% (table top)\n",
+                1000.0 * depthNoiseRms(), 100.0 * holeShare());
+  out << line;
+  return out.str();
+}
+
+bool writeFramePreview(const std::string& prefix, const PinholeIntrinsics& K,
+                       const SequenceFrame& frame, std::string* error) {
+  const std::size_t n = static_cast<std::size_t>(K.width) * K.height;
+  if (frame.images.rgb.size() != 3 * n || frame.images.depth.size() != n) {
+    if (error) *error = "frame images do not match the intrinsics";
+    return false;
+  }
+  cv::Mat rgb(K.height, K.width, CV_8UC3, const_cast<std::uint8_t*>(frame.images.rgb.data()));
+  cv::Mat bgr;
+  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
+  cv::Mat depth8(K.height, K.width, CV_8UC1);
+  cv::Mat holes(K.height, K.width, CV_8UC1);
+  for (int v = 0; v < K.height; ++v) {
+    for (int u = 0; u < K.width; ++u) {
+      const float z = frame.images.depth[static_cast<std::size_t>(v) * K.width + u];
+      holes.at<std::uint8_t>(v, u) = z > 0.f ? 0 : 255;
+      depth8.at<std::uint8_t>(v, u) =
+          static_cast<std::uint8_t>(std::clamp((z - 0.4) / 2.1 * 255.0, 0.0, 255.0));
+    }
+  }
+  cv::Mat depth_colour;
+  cv::applyColorMap(depth8, depth_colour, cv::COLORMAP_TURBO);
+  depth_colour.setTo(cv::Scalar(0, 0, 0), holes);
+  cv::Mat overlay = bgr.clone();
+  for (std::size_t k = 0; k < frame.detections.size(); ++k) {
+    const RawDetection& d = frame.detections[k];
+    const bool truth = k < frame.detection_truth.size() && frame.detection_truth[k] >= 0;
+    const cv::Scalar colour = truth ? cv::Scalar(60, 200, 60) : cv::Scalar(40, 40, 230);
+    cv::rectangle(overlay, cv::Rect(d.box.x, d.box.y, d.box.width, d.box.height), colour, 1);
+    cv::putText(overlay, d.class_name.substr(0, 14), cv::Point(d.box.x, std::max(8, d.box.y - 2)),
+                cv::FONT_HERSHEY_PLAIN, 0.8, colour, 1);
+  }
+  try {
+    if (!cv::imwrite(prefix + "_rgb.png", bgr) ||
+        !cv::imwrite(prefix + "_depth.png", depth_colour) ||
+        !cv::imwrite(prefix + "_detections.png", overlay)) {
+      if (error) *error = "cannot write " + prefix + "_*.png";
+      return false;
+    }
+  } catch (const cv::Exception& e) {
+    if (error) *error = e.what();
+    return false;
+  }
+  return true;
+}
+
+}  // namespace geofusion
