@@ -100,9 +100,12 @@ void addOdometryDrift(std::vector<FramePose>* poses, const OdometryNoise& noise,
   if (poses->empty()) return;
   std::mt19937 rng(seed);
   std::normal_distribution<double> gauss(0.0, 1.0);
-  // Systematic errors, as wheel odometry has: a scale error and a heading bias per metre.
-  const double scale = 1.0 + noise.translation_fraction * gauss(rng);
-  const double yaw_bias = noise.yaw_rad_per_m * gauss(rng);
+  // Systematic errors, as wheel odometry has: a scale error and a heading bias per metre, each
+  // of a random sign and a magnitude between half and all of its configured value.
+  std::uniform_real_distribution<double> half_to_one(0.5, 1.0);
+  auto sign = [&]() { return gauss(rng) < 0.0 ? -1.0 : 1.0; };
+  const double scale = 1.0 + sign() * half_to_one(rng) * noise.translation_fraction;
+  const double yaw_bias = sign() * half_to_one(rng) * noise.yaw_rad_per_m;
   const Eigen::Isometry3d start = (*poses)[0].T_map_base;
   Eigen::Isometry3d odom = start;  // odom = map at the first frame
   (*poses)[0].T_odom_base = odom;

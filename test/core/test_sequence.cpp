@@ -86,7 +86,9 @@ TEST_F(SequenceTest, OdometryDriftsAFewCentimetres) {
     addOdometryDrift(&poses, OdometryNoise(), seed);
     const DriftStats s = measureDrift(poses);
     EXPECT_GT(s.path_length_m, 1.5);
-    EXPECT_LT(s.max_m, 0.06);
+    // A real robot's drift over a table-sized loop (ORB-SLAM2 on TUM desk: 1-2 cm).
+    EXPECT_GT(s.max_m, 0.005);
+    EXPECT_LT(s.max_m, 0.025);
     finals.push_back(s.max_m);
     std::cout << "drift: path " << s.path_length_m << " m, max " << s.max_m * 100 << " cm\n";
   }

@@ -51,9 +51,10 @@ std::vector<FramePose> makeTrajectory(const ClutterScene& scene, const Trajector
                                       unsigned seed);
 
 struct OdometryNoise {
-  /// Systematic, drawn once a sequence: std of the scale error of travelled distance ...
+  /// Systematic, drawn once a sequence (random sign, magnitude 0.5 to 1 times these): the scale
+  /// error of travelled distance ...
   double translation_fraction = 0.006;
-  double yaw_rad_per_m = 0.006;  ///< ... and of the heading bias per metre travelled.
+  double yaw_rad_per_m = 0.006;  ///< ... and the heading bias per metre travelled.
   /// Random, each step: std of the position error (random walk, grows with sqrt(distance)) ...
   double translation_m_per_sqrt_m = 0.0003;
   double yaw_rad_per_sqrt_rad = 0.0008;  ///< ... and of the heading error per sqrt(radian) turned.

@@ -1,0 +1,386 @@
+#include "geofusion/core/scene_estimator.h"
+
+#include "geofusion/core/consistency.h"
+#include "geofusion/core/renderer.h"
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+
+namespace geofusion {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+}  // namespace
+
+const char* toString(Method method) {
+  switch (method) {
+    case Method::kFrameByFrame: return "FbF";
+    case Method::kBaselineSlam: return "B-SLAM";
+    case Method::kRobustFrontEnd: return "R-Front";
+    default: return "GeoFusion";
+  }
+}
+
+bool parseMethod(const std::string& name, Method* method) {
+  std::string n;
+  for (char c : name)
+    if (c != '-' && c != '_') n += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (n == "fbf" || n == "framebyframe")
+    *method = Method::kFrameByFrame;
+  else if (n == "bslam")
+    *method = Method::kBaselineSlam;
+  else if (n == "rfront")
+    *method = Method::kRobustFrontEnd;
+  else if (n == "geofusion")
+    *method = Method::kGeoFusion;
+  else
+    return false;
+  return true;
+}
+
+SceneEstimator::SceneEstimator(const ModelSet& models, const EstimatorConfig& config,
+                               std::shared_ptr<OffscreenRenderer> renderer)
+    : config_(config) {
+  for (const auto& m : models.models()) models_[m->name] = m;
+  if (!renderer) renderer = std::make_shared<OffscreenRenderer>();
+  scorer_ = std::make_unique<ConsistencyScorer>(std::move(renderer), config.consistency);
+}
+
+SceneEstimator::~SceneEstimator() = default;
+
+void SceneEstimator::setConfig(const EstimatorConfig& config) {
+  const Method method = config_.method;
+  config_ = config;
+  config_.method = method;
+  scorer_->setConfig(config.consistency);
+}
+
+void SceneEstimator::reset() {
+  tracks_.clear();
+  T_map_cam_.clear();
+  T_odom_cam_.clear();
+  stamps_.clear();
+  support_ = SupportPlane();
+  support_model_.reset();
+  contacts_.clear();
+  frame_objects_.clear();
+}
+
+bool SceneEstimator::usesConsistency() const {
+  return config_.method == Method::kRobustFrontEnd || config_.method == Method::kGeoFusion;
+}
+
+bool SceneEstimator::optimises() const {
+  return config_.method == Method::kBaselineSlam || config_.method == Method::kGeoFusion;
+}
+
+Eigen::Isometry3d SceneEstimator::T_map_odom() const {
+  if (T_map_cam_.empty()) return Eigen::Isometry3d::Identity();
+  return T_map_cam_.back() * T_odom_cam_.back().inverse();
+}
+
+const Eigen::Isometry3d& SceneEstimator::reportedPose(const Track& track) const {
+  return config_.method == Method::kGeoFusion ? track.T_refined : track.T_stage_one;
+}
+
+ObjectEstimate SceneEstimator::estimateOf(const Track& track) const {
+  ObjectEstimate e;
+  e.id = track.id;
+  e.model = track.model;
+  e.T_map_obj = reportedPose(track);
+  e.measurements = static_cast<int>(track.observations.size());
+  e.best_consistency = track.best_consistency;
+  e.false_positive = falsePositiveScore(track.best_consistency, e.measurements);
+  e.existence = 1.0 - e.false_positive;
+  e.first_keyframe = track.first_keyframe;
+  e.last_keyframe = track.last_keyframe;
+  return e;
+}
+
+std::vector<ObjectEstimate> SceneEstimator::objects() const {
+  if (config_.method == Method::kFrameByFrame) return frame_objects_;
+  std::vector<ObjectEstimate> out;
+  for (const Track& t : tracks_) out.push_back(estimateOf(t));
+  return out;
+}
+
+KeyframeResult SceneEstimator::result(int keyframe, double stamp) const {
+  KeyframeResult r;
+  r.keyframe = keyframe;
+  r.stamp_s = stamp;
+  if (!T_map_cam_.empty()) r.T_map_cam = T_map_cam_.back();
+  r.objects = objects();
+  if (config_.method == Method::kGeoFusion) r.contacts = contacts_;
+  return r;
+}
+
+KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
+  const auto start = Clock::now();
+  StageTimings timings;
+  const int t = static_cast<int>(T_map_cam_.size());
+  // Camera pose: chained from the previous estimate by the odometry increment.
+  const Eigen::Isometry3d T_map_cam =
+      t == 0 ? kf.T_odom_cam : T_map_cam_.back() * (T_odom_cam_.back().inverse() * kf.T_odom_cam);
+  T_map_cam_.push_back(T_map_cam);
+  T_odom_cam_.push_back(kf.T_odom_cam);
+  stamps_.push_back(kf.stamp_s);
+
+  // Usable detections and their geometric consistency (B-SLAM: the detector's score).
+  std::vector<int> usable;
+  std::vector<std::shared_ptr<const ObjectModel>> det_models(kf.detections.size());
+  std::vector<double> consistency(kf.detections.size(), -1.0);
+  int skipped = 0;
+  auto t0 = Clock::now();
+  for (std::size_t k = 0; k < kf.detections.size(); ++k) {
+    const ObjectMeasurement& d = kf.detections[k];
+    const auto it = models_.find(d.class_name);
+    if (it == models_.end() || d.score < config_.min_detection_score ||
+        !d.T_cam_obj.matrix().allFinite()) {
+      ++skipped;
+      continue;
+    }
+    det_models[k] = it->second;
+    if (usesConsistency() && kf.depth.data) {
+      consistency[k] = scorer_->score(it->second, d.T_cam_obj, kf.depth, kf.K).score;
+    } else if (usesConsistency()) {
+      consistency[k] = config_.consistency.undetermined_score;
+    } else {
+      consistency[k] = d.score;
+    }
+    usable.push_back(static_cast<int>(k));
+  }
+  timings.consistency_ms = msSince(t0);
+
+  KeyframeResult out;
+  std::vector<int> detection_object(kf.detections.size(), -1);
+  t0 = Clock::now();
+  if (config_.method == Method::kFrameByFrame) {
+    frame_objects_.clear();
+    for (int k : usable) {
+      const ObjectMeasurement& d = kf.detections[static_cast<std::size_t>(k)];
+      ObjectEstimate e;
+      e.id = next_id_++;
+      e.model = det_models[static_cast<std::size_t>(k)];
+      e.T_map_obj = T_map_cam * d.T_cam_obj;
+      e.existence = d.score;
+      e.false_positive = 1.0 - d.score;
+      e.best_consistency = d.score;
+      e.measurements = 1;
+      e.first_keyframe = e.last_keyframe = t;
+      detection_object[static_cast<std::size_t>(k)] = e.id;
+      frame_objects_.push_back(e);
+    }
+    timings.association_ms = msSince(t0);
+    out = result(t, kf.stamp_s);
+  } else {
+    // Association (Algorithm 1): likelihood = label indicator x consistency x pose factor.
+    const Eigen::Isometry3d T_cam_map = T_map_cam.inverse();
+    Eigen::MatrixXd likelihood = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(usable.size()),
+                                                       static_cast<Eigen::Index>(tracks_.size()));
+    for (std::size_t r = 0; r < usable.size(); ++r) {
+      const std::size_t k = static_cast<std::size_t>(usable[r]);
+      const ObjectMeasurement& d = kf.detections[k];
+      for (std::size_t j = 0; j < tracks_.size(); ++j) {
+        const Track& tr = tracks_[j];
+        if (tr.model->name != d.class_name) continue;
+        const Eigen::Isometry3d predicted = T_cam_map * reportedPose(tr);
+        likelihood(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(j)) =
+            consistency[k] *
+            poseLikelihood(tr.model->symmetry, predicted, d.T_cam_obj, config_.association);
+      }
+    }
+    const std::vector<int> assignment = associate(likelihood, config_.association);
+    std::vector<int> touched;
+    for (std::size_t r = 0; r < usable.size(); ++r) {
+      const std::size_t k = static_cast<std::size_t>(usable[r]);
+      const ObjectMeasurement& d = kf.detections[k];
+      Observation obs{t, d.T_cam_obj, consistency[k]};
+      int j = assignment[r];
+      if (j < 0) {
+        Track tr;
+        tr.id = next_id_++;
+        tr.model = det_models[k];
+        tr.T_stage_one = tr.T_refined = T_map_cam * d.T_cam_obj;
+        tr.first_keyframe = t;
+        Eigen::Vector3f lo, hi;
+        tr.model->mesh.bounds(&lo, &hi);
+        tr.box_centre = (0.5f * (lo + hi)).cast<double>();
+        tr.box_half = (0.5f * (hi - lo)).cast<double>();
+        tracks_.push_back(tr);
+        j = static_cast<int>(tracks_.size()) - 1;
+      }
+      Track& tr = tracks_[static_cast<std::size_t>(j)];
+      tr.observations.push_back(obs);
+      tr.last_keyframe = t;
+      if (!optimises()) {
+        // R-Front: the pose of the most consistent measurement, through the odometry pose.
+        if (obs.consistency >= tr.best_consistency) {
+          tr.T_stage_one = tr.T_refined = T_map_cam * d.T_cam_obj;
+        }
+      }
+      tr.best_consistency = std::max(tr.best_consistency, obs.consistency);
+      touched.push_back(tr.id);
+      detection_object[k] = tr.id;
+    }
+    std::vector<int> removed;
+    if (usesConsistency()) {
+      removeFalsePositives(touched, &removed);
+      mergeOverlapping(&removed);
+    }
+    for (int& id : detection_object) {
+      if (std::find(removed.begin(), removed.end(), id) != removed.end()) id = -1;
+    }
+    timings.association_ms = msSince(t0);
+
+    if (optimises() && (t + 1) % std::max(1, config_.stage_one.every_n_keyframes) == 0) {
+      t0 = Clock::now();
+      runStageOne();
+      timings.stage_one_ms = msSince(t0);
+      out.ran_stage_one = true;
+    }
+    if (config_.method == Method::kGeoFusion) runRelationsAndStageTwo(&kf, &timings);
+    const bool ran = out.ran_stage_one;
+    out = result(t, kf.stamp_s);
+    out.ran_stage_one = ran;
+    out.removed_ids = removed;
+  }
+  out.detection_consistency = consistency;
+  out.detection_object = detection_object;
+  out.skipped_detections = skipped;
+  timings.total_ms = msSince(start);
+  out.timings = timings;
+  return out;
+}
+
+void SceneEstimator::removeFalsePositives(const std::vector<int>& touched,
+                                          std::vector<int>* removed) {
+  std::vector<Track> kept;
+  for (Track& tr : tracks_) {
+    const bool check = std::find(touched.begin(), touched.end(), tr.id) != touched.end();
+    const double f =
+        falsePositiveScore(tr.best_consistency, static_cast<int>(tr.observations.size()));
+    if (check && f > config_.association.eps_fp) {
+      removed->push_back(tr.id);
+    } else {
+      kept.push_back(std::move(tr));
+    }
+  }
+  tracks_ = std::move(kept);
+}
+
+void SceneEstimator::mergeOverlapping(std::vector<int>* removed) {
+  bool merged = true;
+  while (merged) {
+    merged = false;
+    for (std::size_t a = 0; a < tracks_.size() && !merged; ++a) {
+      for (std::size_t b = a + 1; b < tracks_.size() && !merged; ++b) {
+        Track &A = tracks_[a], &B = tracks_[b];
+        Eigen::Isometry3d Ta = reportedPose(A), Tb = reportedPose(B);
+        Ta.translation() += Ta.linear() * A.box_centre;
+        Tb.translation() += Tb.linear() * B.box_centre;
+        if (boxCollisionRatio(Ta, A.box_half, Tb, B.box_half) <= config_.association.merge_ratio)
+          continue;
+        const double fa = falsePositiveScore(A.best_consistency,
+                                             static_cast<int>(A.observations.size())),
+                     fb = falsePositiveScore(B.best_consistency,
+                                             static_cast<int>(B.observations.size()));
+        // The one with the higher false-positive score goes into the other.
+        const std::size_t keep = fa <= fb ? a : b, drop = fa <= fb ? b : a;
+        Track &K = tracks_[keep], &D = tracks_[drop];
+        if (K.model->name == D.model->name) {
+          // Keep one measurement per keyframe: the kept object's own wins.
+          for (const Observation& o : D.observations) {
+            const bool clash =
+                std::any_of(K.observations.begin(), K.observations.end(),
+                            [&](const Observation& x) { return x.keyframe == o.keyframe; });
+            if (!clash) K.observations.push_back(o);
+          }
+          std::sort(
+              K.observations.begin(), K.observations.end(),
+              [](const Observation& x, const Observation& y) { return x.keyframe < y.keyframe; });
+          K.best_consistency = std::max(K.best_consistency, D.best_consistency);
+          K.first_keyframe = std::min(K.first_keyframe, D.first_keyframe);
+          K.last_keyframe = std::max(K.last_keyframe, D.last_keyframe);
+        }
+        removed->push_back(D.id);
+        tracks_.erase(tracks_.begin() + static_cast<std::ptrdiff_t>(drop));
+        merged = true;
+      }
+    }
+  }
+}
+
+void SceneEstimator::runStageOne() {
+  std::vector<Eigen::Isometry3d> objects;
+  std::vector<const ObjectModel*> models;
+  std::vector<StageOneMeasurement> measurements;
+  for (std::size_t j = 0; j < tracks_.size(); ++j) {
+    objects.push_back(tracks_[j].T_stage_one);
+    models.push_back(tracks_[j].model.get());
+    for (const Observation& o : tracks_[j].observations) {
+      measurements.push_back({o.keyframe, static_cast<int>(j), o.T_cam_obj, 1.0});
+    }
+  }
+  const StageOneSummary s =
+      optimizeStageOne(&T_map_cam_, T_odom_cam_, &objects, models, measurements, config_.stage_one);
+  if (!s.solved) return;
+  for (std::size_t j = 0; j < tracks_.size(); ++j) tracks_[j].T_stage_one = objects[j];
+}
+
+void SceneEstimator::runRelationsAndStageTwo(const Keyframe* kf, StageTimings* timings) {
+  auto t0 = Clock::now();
+  if (kf && kf->depth.data) {
+    fuseSupportPlane(estimateSupportPlane(kf->depth, kf->K, T_map_cam_.back(), config_.gravity,
+                                          config_.support_plane),
+                     &support_);
+    if (support_.valid) {
+      support_model_ =
+          supportPlaneModel(support_, &T_map_support_, config_.support_plane.thickness_m);
+    }
+  }
+  // Relations from the refined poses of the previous keyframe (new objects: their stage I pose).
+  std::vector<PosedModel> posed;
+  for (const Track& tr : tracks_) posed.push_back({tr.model.get(), tr.T_refined});
+  PosedModel ground{support_model_.get(), T_map_support_};
+  contacts_ =
+      inferRelations(posed, support_model_ ? &ground : nullptr, config_.gravity, config_.contacts);
+  if (timings) timings->relations_ms = msSince(t0);
+
+  t0 = Clock::now();
+  std::vector<Eigen::Isometry3d> poses, priors;
+  std::vector<const ObjectModel*> models;
+  for (const Track& tr : tracks_) {
+    poses.push_back(tr.T_refined);
+    priors.push_back(tr.T_stage_one);
+    models.push_back(tr.model.get());
+  }
+  optimizeStageTwo(&poses, models, priors, contacts_, support_model_ ? &ground : nullptr,
+                   config_.stage_two);
+  for (std::size_t j = 0; j < tracks_.size(); ++j) tracks_[j].T_refined = poses[j];
+  if (timings) timings->stage_two_ms = msSince(t0);
+}
+
+KeyframeResult SceneEstimator::finish() {
+  const auto start = Clock::now();
+  StageTimings timings;
+  if (optimises() && !T_map_cam_.empty()) {
+    const auto t0 = Clock::now();
+    runStageOne();
+    timings.stage_one_ms = msSince(t0);
+  }
+  if (config_.method == Method::kGeoFusion) runRelationsAndStageTwo(nullptr, &timings);
+  KeyframeResult out =
+      result(static_cast<int>(T_map_cam_.size()) - 1, stamps_.empty() ? 0.0 : stamps_.back());
+  out.ran_stage_one = optimises();
+  timings.total_ms = msSince(start);
+  out.timings = timings;
+  return out;
+}
+
+}  // namespace geofusion
