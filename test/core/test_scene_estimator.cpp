@@ -1,0 +1,260 @@
+// The scene estimator end to end on a generated clutter sequence (built-in primitives): the four
+// methods from one code path, object count, false-positive removal and pose error.
+#include "geofusion/core/dataset.h"
+#include "geofusion/core/frame_by_frame.h"
+#include "geofusion/core/metrics.h"
+#include "geofusion/core/renderer.h"
+#include "geofusion/core/scene_estimator.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <functional>
+#include <iostream>
+#include <limits>
+
+namespace geofusion {
+namespace {
+
+struct Sequence {
+  ModelSet models;
+  ClutterScene scene;
+  std::vector<FramePose> poses;
+  std::vector<SequenceFrame> frames;
+};
+
+// 40 keyframes of the demo scene at 5 Hz with DenseFusion-like detections and drifting odometry.
+const Sequence& demoSequence() {
+  static Sequence* seq = [] {
+    auto* s = new Sequence();
+    s->models = ModelSet::builtinPrimitives();
+    SuiteSpec suite;
+    suiteByName("demo", &suite);
+    std::string report;
+    unsigned used = 0;
+    if (!makeSuiteScene(suite, suite.scenes[0], s->models, &s->scene, &used, &report)) {
+      ADD_FAILURE() << report;
+      return s;
+    }
+    TrajectoryConfig traj;
+    traj.frames = 40;
+    s->poses = makeTrajectory(s->scene, traj, 3);
+    addOdometryDrift(&s->poses, OdometryNoise(), 4);
+    SequenceRenderer renderer(s->scene, PinholeIntrinsics());
+    std::mt19937 rng(5);
+    DetectorModel detector = DetectorModel::denseFusion();
+    detector.false_positives_per_frame = 1.0;
+    for (const FramePose& p : s->poses) {
+      s->frames.push_back(renderer.render(p, DepthNoise(), detector, s->models, rng));
+    }
+    return s;
+  }();
+  return *seq;
+}
+
+Keyframe keyframeOf(const Sequence& s, std::size_t k) {
+  Keyframe kf;
+  kf.stamp_s = s.poses[k].stamp_s;
+  kf.T_odom_cam =
+      s.poses[k].T_odom_base * s.poses[k].T_base_link * RobotGeometry::cameraLinkToOptical();
+  kf.depth = DepthImageView{s.frames[k].images.depth.data(), kf.K.width, kf.K.height};
+  const FrameByFrame checker;
+  for (const RawDetection& raw : s.frames[k].detections) {
+    ObjectMeasurement m;
+    SkipReason why;
+    if (checker.check(raw, &m, &why)) kf.detections.push_back(m);
+  }
+  return kf;
+}
+
+struct Score {
+  int true_positives = 0, false_positives = 0, objects = 0;
+  double mean_adds = 0.0;
+};
+
+// Matches estimated objects (in the map frame, which starts at the first odometry pose; here
+// odom = map at the first frame) to true objects of the same class within 5 cm ADD-S.
+Score scoreMap(const Sequence& s, const std::vector<ObjectEstimate>& objects) {
+  Score sc;
+  std::vector<bool> taken(s.scene.objects.size(), false);
+  for (const ObjectEstimate& o : objects) {
+    ++sc.objects;
+    double best = 1e9;
+    int best_i = -1;
+    for (std::size_t i = 0; i < s.scene.objects.size(); ++i) {
+      if (taken[i] || s.scene.objects[i].model->name != o.model->name) continue;
+      const double e = addsError(o.model->points, o.T_map_obj, s.scene.objects[i].T_world_obj);
+      if (e < best) best = e, best_i = static_cast<int>(i);
+    }
+    if (best_i >= 0 && best < 0.05) {
+      taken[static_cast<std::size_t>(best_i)] = true;
+      ++sc.true_positives;
+      sc.mean_adds += best;
+    } else {
+      ++sc.false_positives;
+    }
+  }
+  if (sc.true_positives) sc.mean_adds /= sc.true_positives;
+  return sc;
+}
+
+int objectsSeenOften(const Sequence& s, int min_frames) {
+  int n = 0;
+  for (std::size_t i = 0; i < s.scene.objects.size(); ++i) {
+    int seen = 0;
+    for (const auto& f : s.frames) {
+      for (int truth : f.detection_truth) seen += truth == static_cast<int>(i);
+    }
+    n += seen >= min_frames;
+  }
+  return n;
+}
+
+Score run(Method method, std::vector<KeyframeResult>* results = nullptr,
+          const std::function<void(EstimatorConfig*)>& configure = nullptr,
+          const std::function<void(Keyframe*)>& modify = nullptr) {
+  const Sequence& s = demoSequence();
+  EstimatorConfig config;
+  config.method = method;
+  if (configure) configure(&config);
+  SceneEstimator estimator(s.models, config);
+  for (std::size_t k = 0; k < s.frames.size(); ++k) {
+    Keyframe kf = keyframeOf(s, k);
+    if (modify) modify(&kf);
+    KeyframeResult r = estimator.addKeyframe(kf);
+    if (results) results->push_back(r);
+  }
+  const KeyframeResult final = estimator.finish();
+  return scoreMap(s, final.objects);
+}
+
+TEST(SceneEstimator, MethodNames) {
+  Method m;
+  for (Method x : {Method::kFrameByFrame, Method::kBaselineSlam, Method::kRobustFrontEnd,
+                   Method::kGeoFusion}) {
+    ASSERT_TRUE(parseMethod(toString(x), &m));
+    EXPECT_EQ(m, x);
+  }
+  EXPECT_TRUE(parseMethod("geofusion", &m));
+  EXPECT_FALSE(parseMethod("orbslam", &m));
+}
+
+TEST(SceneEstimator, GeoFusionFindsTheObjectsAndDropsFalsePositives) {
+  const Sequence& s = demoSequence();
+  ASSERT_EQ(s.frames.size(), 40u);
+  int fp_detections = 0;
+  for (const auto& f : s.frames)
+    for (int t : f.detection_truth) fp_detections += t < 0;
+  ASSERT_GT(fp_detections, 20);
+  std::vector<KeyframeResult> results;
+  const Score geo = run(Method::kGeoFusion, &results);
+  const int expected = objectsSeenOften(s, 5);
+  std::printf(
+      "GeoFusion: %d objects (%d true, %d false; %d true objects seen in >= 5 frames), "
+      "mean ADD-S %.2f mm\n",
+      geo.objects, geo.true_positives, geo.false_positives, expected, 1000 * geo.mean_adds);
+  EXPECT_GE(geo.true_positives, expected - 1);
+  EXPECT_LE(geo.false_positives, 1);
+  double worst = 0;
+  for (const auto& r : results) worst = std::max(worst, r.timings.total_ms);
+  std::printf("worst keyframe %.1f ms\n", worst);
+}
+
+TEST(SceneEstimator, GeoFusionIsMoreAccurateThanFrameByFrame) {
+  const Sequence& s = demoSequence();
+  // FbF: every keyframe's true-class detections against the truth.
+  std::vector<double> fbf;
+  for (std::size_t k = 0; k < s.frames.size(); ++k) {
+    const Keyframe kf = keyframeOf(s, k);
+    (void)kf;
+    const auto& f = s.frames[k];
+    for (std::size_t d = 0; d < f.detections.size(); ++d) {
+      if (f.detection_truth[d] < 0) continue;
+      const auto& o = s.scene.objects[static_cast<std::size_t>(f.detection_truth[d])];
+      if (o.model->name != f.detections[d].class_name) continue;
+      Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+      T.linear() = f.detections[d].orientation_cam.normalized().toRotationMatrix();
+      T.translation() = f.detections[d].position_cam;
+      fbf.push_back(
+          addsError(o.model->points, T, s.poses[k].T_map_optical.inverse() * o.T_world_obj));
+    }
+  }
+  double fbf_mean = 0;
+  for (double e : fbf) fbf_mean += e / fbf.size();
+  const Score geo = run(Method::kGeoFusion);
+  const Score rfront = run(Method::kRobustFrontEnd);
+  const Score bslam = run(Method::kBaselineSlam);
+  std::printf(
+      "mean ADD-S: FbF %.2f mm, B-SLAM %.2f mm (%d/%d), R-Front %.2f mm (%d/%d), "
+      "GeoFusion %.2f mm (%d/%d)\n",
+      1000 * fbf_mean, 1000 * bslam.mean_adds, bslam.true_positives, bslam.objects,
+      1000 * rfront.mean_adds, rfront.true_positives, rfront.objects, 1000 * geo.mean_adds,
+      geo.true_positives, geo.objects);
+  EXPECT_LT(geo.mean_adds, fbf_mean);
+}
+
+TEST(SceneEstimator, JointAssignmentIsAtLeastAsGoodAsTheGreedyOrder) {
+  const Score joint = run(Method::kGeoFusion);
+  const Score greedy = run(Method::kGeoFusion, nullptr,
+                           [](EstimatorConfig* c) { c->association.joint_assignment = false; });
+  std::printf("joint: %d true / %d objects, %.2f mm; greedy: %d / %d, %.2f mm\n",
+              joint.true_positives, joint.objects, 1000 * joint.mean_adds, greedy.true_positives,
+              greedy.objects, 1000 * greedy.mean_adds);
+  EXPECT_GE(joint.true_positives, greedy.true_positives);
+  EXPECT_LE(joint.false_positives, greedy.false_positives);
+  EXPECT_LE(joint.mean_adds, greedy.mean_adds + 0.0005);
+}
+
+TEST(SceneEstimator, DuplicateOfASymmetricObjectIsMerged) {
+  const Sequence& s = demoSequence();
+  // Every keyframe also reports a second copy of its first symmetric detection, 1 cm away:
+  // one measurement per object sends it to a new object, which the overlap check merges.
+  int duplicated = 0;
+  auto duplicate = [&](Keyframe* kf) {
+    for (const ObjectMeasurement& m : kf->detections) {
+      const ObjectModel* model = s.models.find(m.class_name);
+      if (!model || model->symmetry.type != Symmetry::Type::kContinuous) continue;
+      ObjectMeasurement copy = m;
+      copy.T_cam_obj.translation() += Eigen::Vector3d(0.01, 0.0, 0.0);
+      kf->detections.push_back(copy);
+      ++duplicated;
+      break;
+    }
+  };
+  std::vector<KeyframeResult> results;
+  const Score plain = run(Method::kGeoFusion);
+  const Score with_duplicates = run(Method::kGeoFusion, &results, nullptr, duplicate);
+  ASSERT_GT(duplicated, 20);
+  int merged = 0;
+  for (const auto& r : results) merged += static_cast<int>(r.removed_ids.size());
+  std::printf("%d duplicates: %d objects (without: %d), %d removals\n", duplicated,
+              with_duplicates.objects, plain.objects, merged);
+  EXPECT_EQ(with_duplicates.objects, plain.objects);
+  EXPECT_EQ(with_duplicates.false_positives, 0);
+  EXPECT_GT(merged, 0);
+}
+
+TEST(SceneEstimator, BadInputIsSkippedNotFatal) {
+  const Sequence& s = demoSequence();
+  EstimatorConfig config;
+  SceneEstimator estimator(s.models, config);
+  Keyframe kf = keyframeOf(s, 0);
+  ObjectMeasurement unknown = kf.detections.front();
+  unknown.class_name = "999_unknown";
+  kf.detections.push_back(unknown);
+  ObjectMeasurement nan = kf.detections.front();
+  nan.T_cam_obj.translation().x() = std::numeric_limits<double>::quiet_NaN();
+  kf.detections.push_back(nan);
+  const KeyframeResult r = estimator.addKeyframe(kf);
+  EXPECT_EQ(r.skipped_detections, 2);
+  for (const auto& o : r.objects) EXPECT_TRUE(o.T_map_obj.matrix().allFinite());
+  // A keyframe without depth: nothing is scored against the observation, nothing crashes.
+  Keyframe blind = keyframeOf(s, 1);
+  blind.depth = DepthImageView{};
+  const KeyframeResult r2 = estimator.addKeyframe(blind);
+  EXPECT_EQ(r2.keyframe, 1);
+  for (const auto& o : r2.objects) EXPECT_TRUE(o.T_map_obj.matrix().allFinite());
+}
+
+}  // namespace
+}  // namespace geofusion
