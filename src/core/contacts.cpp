@@ -95,7 +95,7 @@ std::vector<WorldCurve> worldCurves(const PosedModel& m) {
 
 bool projectionsOverlap(const std::vector<Eigen::Vector3d>& a,
                         const std::vector<Eigen::Vector3d>& b, const Eigen::Vector3d& direction,
-                        double min_overlap) {
+                        double min_overlap, double line_tolerance) {
   if (a.empty() || b.empty() || direction.norm() < 1e-12) return false;
   const Eigen::Vector3d n = direction.normalized();
   const Eigen::Vector3d u = n.unitOrthogonal(), w = n.cross(u);
@@ -110,13 +110,21 @@ bool projectionsOverlap(const std::vector<Eigen::Vector3d>& a,
   addAxes(pa, &axes);
   addAxes(pb, &axes);
   if (axes.empty()) axes = {Point2::UnitX(), Point2::UnitY()};
-  // Smallest separating push over all axes (SAT penetration depth); it is the overlap.
+  // Smallest separating push over all axes (SAT penetration depth); it is the overlap. Along an
+  // axis across which both outlines have no width (two parallel line features, e.g. cans lying
+  // side by side seen along their contact normal), there is no area to overlap: the outlines need
+  // only meet within line_tolerance there.
   double depth = std::numeric_limits<double>::max();
   for (const Point2& ax : axes) {
     double lo_a = std::numeric_limits<double>::max(), hi_a = -lo_a, lo_b = lo_a, hi_b = -lo_a;
     for (const auto& p : pa) lo_a = std::min(lo_a, p.dot(ax)), hi_a = std::max(hi_a, p.dot(ax));
     for (const auto& p : pb) lo_b = std::min(lo_b, p.dot(ax)), hi_b = std::max(hi_b, p.dot(ax));
-    depth = std::min(depth, std::min(hi_a - lo_b, hi_b - lo_a));
+    const double d = std::min(hi_a - lo_b, hi_b - lo_a);
+    if (std::max(hi_a - lo_a, hi_b - lo_b) < 1e-6) {
+      if (d < -line_tolerance) return false;
+    } else {
+      depth = std::min(depth, d);
+    }
   }
   return depth >= min_overlap;
 }
@@ -151,7 +159,8 @@ std::vector<FeatureContact> findContacts(const std::vector<PosedModel>& objects,
     if (cfg.support_only && !c.support) return;
     // Project along gravity for support contacts (the paper), along the normal otherwise.
     const Eigen::Vector3d along = c.support ? up : c.normal;
-    if (!projectionsOverlap(outline_i, outline_j, along, cfg.min_overlap_m)) return;
+    if (!projectionsOverlap(outline_i, outline_j, along, cfg.min_overlap_m, cfg.line_tolerance_m))
+      return;
     if (c.support && vertical < 0) {  // the supporter comes first
       std::swap(c.object_a, c.object_b);
       std::swap(c.feature_a, c.feature_b);

@@ -226,7 +226,7 @@ struct ContactError {
         const Eigen::Matrix<T, 3, 1> c = Na.cross(Nb);
         const T cn2 = c.squaredNorm();
         T dist;
-        if (cn2 > T(1e-4)) {  // skew axes: distance along the common normal
+        if (cn2 > T(0.01)) {  // skew axes (as contacts.cpp decides): along the common normal
           const T proj = c.dot(d);
           dist = sqrt(proj * proj / cn2 + T(1e-12));
         } else {  // parallel axes: distance between the lines

@@ -188,9 +188,10 @@ void applyDepthNoise(const PinholeIntrinsics& K, const DepthNoise& noise, std::m
 
 DetectorModel DetectorModel::posecnn() {
   DetectorModel m;
-  m.translation_sigma_m = 0.011;
-  m.rotation_sigma_rad = 0.12;
-  m.gross_error_rate = 0.07;
+  // PoseCNN without ICP: YCB-Video ADD-S AUC 75.9, a mean clipped ADD-S of about 24 mm.
+  m.translation_sigma_m = 0.017;
+  m.rotation_sigma_rad = 0.18;
+  m.gross_error_rate = 0.09;
   m.class_swap_rate = 0.04;
   m.miss_rate = 0.06;
   m.false_positives_per_frame = 0.6;

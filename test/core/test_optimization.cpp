@@ -263,5 +263,46 @@ TEST(Relations, NearbyButNotTouchingGivesNothing) {
   EXPECT_TRUE(inferRelations(posed, &ground.posed, kGravity, ContactConfig()).empty());
 }
 
+TEST(Relations, CansSideBySideTouchCurveToCurve) {
+  const Ground ground;
+  const ObjectModel can = canModel(0.033, 0.1);
+  // Two cans lying along x on the table, side by side, 1 mm apart.
+  const Eigen::Matrix3d lying = rot(90, Eigen::Vector3d::UnitY());
+  std::vector<PosedModel> posed = {{&can, at(0, 0, 0.783, lying)},
+                                   {&can, at(0, 0.067, 0.783, lying)}};
+  ContactConfig all;
+  all.support_only = false;
+  int c2c = 0, on_table = 0;
+  for (const auto& c : inferRelations(posed, &ground.posed, kGravity, all)) {
+    if (c.object_a == -1) {
+      ++on_table;
+      EXPECT_EQ(c.type, ContactType::kPlaneCurve);
+    } else {
+      ++c2c;
+      EXPECT_EQ(c.type, ContactType::kCurveCurve);
+      EXPECT_FALSE(c.support);
+      EXPECT_NEAR(std::abs(c.normal.y()), 1.0, 1e-3);
+    }
+  }
+  EXPECT_EQ(on_table, 2);
+  EXPECT_EQ(c2c, 1);
+  // Stage II keeps only support contacts: the side contact is not a support.
+  for (const auto& c : inferRelations(posed, &ground.posed, kGravity, ContactConfig()))
+    EXPECT_EQ(c.object_a, -1);
+}
+
+TEST(Relations, TouchingVerticalFacesAreNoSupport) {
+  const Ground ground;
+  const ObjectModel box = boxModel({0.1, 0.1, 0.1});
+  // Two boxes on the table, side faces 1 mm apart: only the two table contacts.
+  std::vector<PosedModel> posed = {{&box, at(0, 0, 0.80)}, {&box, at(0.101, 0, 0.80)}};
+  const auto contacts = inferRelations(posed, &ground.posed, kGravity, ContactConfig());
+  ASSERT_EQ(contacts.size(), 2u);
+  for (const auto& c : contacts) {
+    EXPECT_EQ(c.object_a, -1);
+    EXPECT_TRUE(c.support);
+  }
+}
+
 }  // namespace
 }  // namespace geofusion

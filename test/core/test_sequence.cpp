@@ -126,6 +126,20 @@ TEST_F(SequenceTest, FramesHaveNoisyDepthAndCalibratedDetections) {
   EXPECT_LT(calibration.depthNoiseRms(), 0.006);
   EXPECT_GT(calibration.holeShare(), 0.005);
   EXPECT_LT(calibration.holeShare(), 0.15);
+
+  // The harsher PoseCNN-like preset on the same views. Its YCB-Video target is ADD-S AUC 75.9
+  // (measured on the bench suite: 78.4, docs/dataset.md); these primitives have no clamps,
+  // scissors or markers, which pull the YCB figure down, so here it is about 85.
+  SequenceCalibration harsh;
+  std::mt19937 rng2(9);
+  for (const auto& pose : poses) {
+    harsh.add(*scene_, pose.T_map_optical,
+              renderer.render(pose, DepthNoise(), DetectorModel::posecnn(), *models_, rng2));
+  }
+  std::cout << "PoseCNN-like:\n" << harsh.report();
+  EXPECT_LT(harsh.overall().auc, all.auc - 7.0);
+  EXPECT_GT(harsh.overall().auc, 75.0);
+  EXPECT_LT(harsh.overall().below_2cm, 0.85);
 }
 
 }  // namespace

@@ -44,6 +44,9 @@ struct ContactConfig {
   /// Projection-overlap check: the features' 2D outlines must overlap by at least this, metres
   /// (negative tolerates a gap).
   double min_overlap_m = 0.002;
+  /// ... except across two parallel line outlines (no width to overlap), which need only meet
+  /// within this distance (two cans lying side by side), metres.
+  double line_tolerance_m = 0.004;
   /// Keep only support contacts (the paper's stage II); false also reports side contacts.
   bool support_only = true;
 };
@@ -65,9 +68,10 @@ std::vector<FeatureContact> findAllContacts(const std::vector<PosedModel>& objec
                                             const ContactConfig& config = ContactConfig());
 
 /// Whether the convex outlines of two point sets, projected along `direction`, overlap by at
-/// least `min_overlap` (separating axis theorem; two points make a segment, one a point).
+/// least `min_overlap` (separating axis theorem; two points make a segment, one a point). Along
+/// an axis across which both outlines have no width, they need only meet within `line_tolerance`.
 bool projectionsOverlap(const std::vector<Eigen::Vector3d>& a,
                         const std::vector<Eigen::Vector3d>& b, const Eigen::Vector3d& direction,
-                        double min_overlap);
+                        double min_overlap, double line_tolerance = 0.004);
 
 }  // namespace geofusion
