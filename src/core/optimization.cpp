@@ -80,6 +80,18 @@ struct RelativePoseError {
   Eigen::Vector3d axis;
 };
 
+ceres::Solver::Summary solveQuietly(ceres::Problem* problem, ceres::LinearSolverType solver,
+                                    int max_iterations) {
+  ceres::Solver::Options options;
+  options.linear_solver_type = solver;
+  options.max_num_iterations = max_iterations;
+  options.num_threads = 1;
+  options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, problem, &summary);
+  return summary;
+}
+
 bool freeAxis(const ObjectModel* model, Eigen::Vector3d* axis) {
   if (model && model->symmetry.type == Symmetry::Type::kContinuous) {
     *axis = model->symmetry.axis;
@@ -157,13 +169,8 @@ StageOneSummary optimizeStageOne(std::vector<Eigen::Isometry3d>* T_map_cam,
   problem.SetParameterBlockConstant(cams[0].q.data());
   problem.SetParameterBlockConstant(cams[0].t.data());
 
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::SPARSE_SCHUR;
-  options.max_num_iterations = config.max_iterations;
-  options.num_threads = 1;
-  options.logging_type = ceres::SILENT;
-  ceres::Solver::Summary s;
-  ceres::Solve(options, &problem, &s);
+  const ceres::Solver::Summary s =
+      solveQuietly(&problem, ceres::SPARSE_SCHUR, config.max_iterations);
   summary.solved = s.IsSolutionUsable();
   summary.iterations = static_cast<int>(s.iterations.size());
   summary.initial_cost = s.initial_cost;
@@ -340,13 +347,8 @@ StageTwoSummary optimizeStageTwo(std::vector<Eigen::Isometry3d>* T_world_obj,
     problem.SetParameterBlockConstant(ground_block.q.data());
     problem.SetParameterBlockConstant(ground_block.t.data());
   }
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-  options.max_num_iterations = config.max_iterations;
-  options.num_threads = 1;
-  options.logging_type = ceres::SILENT;
-  ceres::Solver::Summary s;
-  ceres::Solve(options, &problem, &s);
+  const ceres::Solver::Summary s =
+      solveQuietly(&problem, ceres::SPARSE_NORMAL_CHOLESKY, config.max_iterations);
   summary.solved = s.IsSolutionUsable();
   summary.initial_cost = s.initial_cost;
   summary.final_cost = s.final_cost;

@@ -6,6 +6,7 @@
 //   generate_dataset --suite demo|bench [--out-dir DIR] [--models DIR] [--model-set YAML]
 //       [--scenes bench_01,...] [--keyframes N] [--image-every N] [--detector densefusion|posecnn]
 //       [--depth-encoding 16UC1|32FC1] [--no-compression] [--previews N] [--force]
+#include "command_line.h"
 #include "geofusion/core/dataset.h"
 #include "geofusion/ros/recording_writer.h"
 
@@ -60,12 +61,10 @@ std::vector<std::string> split(const std::string& s) {
 
 Options parse(int argc, char** argv) {
   Options o;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error("missing value after " + a);
-      return argv[++i];
-    };
+  geofusion::CommandLine args(argc, argv);
+  std::string a;
+  while (args.next(&a)) {
+    auto next = [&]() { return args.value(); };
     if (a == "--suite")
       o.suite = next();
     else if (a == "--out-dir")

@@ -5,6 +5,7 @@
 //   make_synthetic_bag --out demo.bag [--ground-truth demo_gt.yaml] [--frames 60]
 //       [--rate 10] [--seed 1] [--malformed-every 0] [--tf-until -1]
 //       [--depth-encoding 32FC1|16UC1] [--detection-stamp-offset 0]
+#include "command_line.h"
 #include "geofusion/core/box_scene.h"
 #include "geofusion/core/frame_by_frame.h"
 #include "geofusion/core/sequence.h"
@@ -43,12 +44,10 @@ void usage() {
 
 Options parse(int argc, char** argv) {
   Options o;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error("missing value after " + a);
-      return argv[++i];
-    };
+  geofusion::CommandLine args(argc, argv);
+  std::string a;
+  while (args.next(&a)) {
+    auto next = [&]() { return args.value(); };
     if (a == "--out")
       o.out = next();
     else if (a == "--ground-truth")

@@ -1,6 +1,8 @@
 // Data association pieces on constructed cases with known answers.
 #include "geofusion/core/association.h"
 
+#include "test_geometry.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,17 +10,7 @@
 namespace geofusion {
 namespace {
 
-Eigen::Isometry3d at(double x, double y, double z,
-                     const Eigen::Matrix3d& R = Eigen::Matrix3d::Identity()) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = R;
-  T.translation() = Eigen::Vector3d(x, y, z);
-  return T;
-}
-
-Eigen::Matrix3d rot(double deg, const Eigen::Vector3d& axis) {
-  return Eigen::AngleAxisd(deg * M_PI / 180.0, axis.normalized()).toRotationMatrix();
-}
+using namespace test;  // NOLINT: the shared test helpers
 
 TEST(Association, HungarianFindsTheOptimum) {
   Eigen::MatrixXd cost(3, 3);

@@ -2,40 +2,16 @@
 // support-direction and projection-overlap checks, on arrangements with known answers.
 #include "geofusion/core/contacts.h"
 
+#include "test_geometry.h"
+
 #include <gtest/gtest.h>
 
 namespace geofusion {
 namespace {
 
+using namespace test;  // NOLINT: the shared test helpers
+
 const Eigen::Vector3d kGravity(0, 0, -1);
-
-ObjectModel boxModel(double x, double y, double z) {
-  ObjectModel m;
-  m.name = "box";
-  m.mesh = makeBox(Eigen::Vector3d(x, y, z));
-  m.features = extractSurfaceFeatures(m.mesh);
-  return m;
-}
-
-ObjectModel canModel(double radius, double height) {
-  ObjectModel m;
-  m.name = "can";
-  m.mesh = makeCylinder(radius, height);
-  m.features = extractSurfaceFeatures(m.mesh);
-  return m;
-}
-
-Eigen::Isometry3d at(double x, double y, double z,
-                     const Eigen::Matrix3d& R = Eigen::Matrix3d::Identity()) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = R;
-  T.translation() = Eigen::Vector3d(x, y, z);
-  return T;
-}
-
-Eigen::Matrix3d rot(double deg, const Eigen::Vector3d& axis) {
-  return Eigen::AngleAxisd(deg * M_PI / 180.0, axis.normalized()).toRotationMatrix();
-}
 
 TEST(Contacts, BoxOnTableIsOnePlanePlaneSupport) {
   const ObjectModel table = boxModel(1.0, 1.0, 0.04), box = boxModel(0.1, 0.16, 0.2);

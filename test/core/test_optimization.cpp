@@ -6,6 +6,8 @@
 #include "geofusion/core/relations.h"
 #include "geofusion/core/renderer.h"
 
+#include "test_geometry.h"
+
 #include <gtest/gtest.h>
 
 #include <random>
@@ -13,38 +15,9 @@
 namespace geofusion {
 namespace {
 
+using namespace test;  // NOLINT: the shared test helpers
+
 const Eigen::Vector3d kGravity(0, 0, -1);
-
-Eigen::Isometry3d at(double x, double y, double z,
-                     const Eigen::Matrix3d& R = Eigen::Matrix3d::Identity()) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = R;
-  T.translation() = Eigen::Vector3d(x, y, z);
-  return T;
-}
-
-Eigen::Matrix3d rot(double deg, const Eigen::Vector3d& axis) {
-  return Eigen::AngleAxisd(deg * M_PI / 180.0, axis.normalized()).toRotationMatrix();
-}
-
-ObjectModel boxModel(const Eigen::Vector3d& size) {
-  ObjectModel m;
-  m.name = "box";
-  m.mesh = makeBox(size);
-  m.features = extractSurfaceFeatures(m.mesh);
-  m.points = sampleSurfacePoints(m.mesh, 500);
-  return m;
-}
-
-ObjectModel canModel(double radius, double height) {
-  ObjectModel m;
-  m.name = "can";
-  m.mesh = makeCylinder(radius, height);
-  m.features = extractSurfaceFeatures(m.mesh);
-  m.points = sampleSurfacePoints(m.mesh, 500);
-  m.symmetry.type = Symmetry::Type::kContinuous;
-  return m;
-}
 
 Eigen::Isometry3d perturb(const Eigen::Isometry3d& T, double sigma_t, double sigma_r,
                           std::mt19937& rng) {
@@ -82,7 +55,7 @@ TEST(StageOne, KnownAssociationsReducePoseError) {
 void stageOneCase(double meas_t, double meas_r, double odo_t, double odo_r, double* before_out,
                   double* after_out, double* axis_error) {
   std::mt19937 rng(7);
-  const ObjectModel box = boxModel({0.08, 0.05, 0.15});
+  const ObjectModel box = boxModel(0.08, 0.05, 0.15);
   const ObjectModel can = canModel(0.035, 0.1);
   std::vector<const ObjectModel*> models = {&box, &box, &can, &box, &can};
   std::vector<Eigen::Isometry3d> truth;
@@ -171,7 +144,7 @@ struct Ground {
 
 TEST(StageTwo, RemovesInterpenetrationAndFloating) {
   const Ground ground;
-  const ObjectModel box = boxModel({0.1, 0.1, 0.05});
+  const ObjectModel box = boxModel(0.1, 0.1, 0.05);
   // Bottom box 5 mm into the table, top box floating 5 mm above it, both slightly tilted.
   const Eigen::Isometry3d bottom_true = at(0, 0, 0.775), top_true = at(0.01, 0, 0.825);
   std::vector<Eigen::Isometry3d> priors = {at(0, 0, 0.770, rot(1.5, Eigen::Vector3d::UnitX())),
@@ -204,7 +177,7 @@ TEST(StageTwo, RemovesInterpenetrationAndFloating) {
 
 TEST(StageTwo, CanLyingOnABoxTouchesIt) {
   const Ground ground;
-  const ObjectModel box = boxModel({0.2, 0.2, 0.1});
+  const ObjectModel box = boxModel(0.2, 0.2, 0.1);
   const ObjectModel can = canModel(0.03, 0.1);
   // Box on the table; can lying on the box, 4 mm into it.
   std::vector<Eigen::Isometry3d> priors = {at(0, 0, 0.80),
@@ -252,7 +225,7 @@ TEST(Relations, SupportPlaneFromRenderedDepth) {
 
 TEST(Relations, NearbyButNotTouchingGivesNothing) {
   const Ground ground;
-  const ObjectModel box = boxModel({0.1, 0.1, 0.1});
+  const ObjectModel box = boxModel(0.1, 0.1, 0.1);
   // Two boxes on the table 2 cm apart: only the two table contacts.
   std::vector<PosedModel> posed = {{&box, at(0, 0, 0.80)}, {&box, at(0.12, 0, 0.80)}};
   auto contacts = inferRelations(posed, &ground.posed, kGravity, ContactConfig());
@@ -293,7 +266,7 @@ TEST(Relations, CansSideBySideTouchCurveToCurve) {
 
 TEST(Relations, TouchingVerticalFacesAreNoSupport) {
   const Ground ground;
-  const ObjectModel box = boxModel({0.1, 0.1, 0.1});
+  const ObjectModel box = boxModel(0.1, 0.1, 0.1);
   // Two boxes on the table, side faces 1 mm apart: only the two table contacts.
   std::vector<PosedModel> posed = {{&box, at(0, 0, 0.80)}, {&box, at(0.101, 0, 0.80)}};
   const auto contacts = inferRelations(posed, &ground.posed, kGravity, ContactConfig());
