@@ -339,4 +339,16 @@ bool makeClutterScene(const ModelSet& models, const ClutterConfig& config, unsig
   return scene->max_penetration_m <= config.max_penetration_m;
 }
 
+double hullPenetration(const ObjectModel& a, const Eigen::Isometry3d& T_world_a,
+                       const ObjectModel& b, const Eigen::Isometry3d& T_world_b) {
+  // Models from a ModelSet carry their hull; others get one made here.
+  const TriangleMesh hull_a = a.collision_hull.empty() ? collisionHull(a.mesh) : TriangleMesh();
+  const TriangleMesh hull_b = b.collision_hull.empty() ? collisionHull(b.mesh) : TriangleMesh();
+  fcl::CollisionObjectd oa(fclHull(a.collision_hull.empty() ? hull_a : a.collision_hull),
+                           fcl::Transform3d(T_world_a.matrix()));
+  fcl::CollisionObjectd ob(fclHull(b.collision_hull.empty() ? hull_b : b.collision_hull),
+                           fcl::Transform3d(T_world_b.matrix()));
+  return penetration(&oa, &ob);
+}
+
 }  // namespace geofusion

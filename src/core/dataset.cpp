@@ -47,6 +47,31 @@ std::vector<std::string> suiteNames() {
   return {"demo", "bench"};
 }
 
+std::string describeSuite(const SuiteSpec& s) {
+  std::ostringstream o;
+  o.precision(9);
+  const ClutterConfig& c = s.clutter;
+  const TrajectoryConfig& t = s.trajectory;
+  const OdometryNoise& n = s.odometry;
+  const DepthNoise& d = s.depth;
+  const DetectorModel& m = s.detector;
+  o << "generator v" << kGeneratorVersion << "; suite " << s.name << " " << s.model_set
+    << "; keyframes " << s.keyframes << " every " << s.image_every << " at " << s.camera_rate_hz
+    << " Hz; clutter " << c.area_x_m << " " << c.area_y_m << " " << c.stack_fraction << " "
+    << c.lying_fraction << " " << c.max_penetration_m << " " << c.touch_distance_m
+    << "; trajectory " << t.min_distance_m << " " << t.max_distance_m << " " << t.min_height_m
+    << " " << t.max_height_m << " " << t.arc_rad << " " << t.pause_fraction << "; odometry "
+    << n.translation_fraction << " " << n.yaw_rad_per_m << " " << n.translation_m_per_sqrt_m << " "
+    << n.yaw_rad_per_sqrt_rad << "; depth " << d.sigma_base_m << " " << d.sigma_quad_m << " "
+    << d.quantisation_m << " " << d.edge_jump_m << " " << d.edge_dropout << " "
+    << d.grazing_angle_deg << " " << d.grazing_dropout << " " << d.max_range_m << "; detector "
+    << m.translation_sigma_m << " " << m.rotation_sigma_rad << " " << m.gross_error_rate << " "
+    << m.symmetric_flip_rate << " " << m.class_swap_rate << " " << m.miss_rate << " "
+    << m.miss_occlusion_gain << " " << m.min_visible_pixels << " " << m.false_positives_per_frame;
+  for (const auto& g : m.class_noise_gain) o << " " << g.first << "=" << g.second;
+  return o.str();
+}
+
 bool makeSuiteScene(const SuiteSpec& suite, const SceneSpec& spec, const ModelSet& models,
                     ClutterScene* scene, unsigned* used_seed, std::string* report, int attempts) {
   ClutterConfig clutter = suite.clutter;

@@ -4,6 +4,7 @@
 
 #include <ceres/ceres.h>
 #include <ceres/manifold.h>
+#include <ceres/product_manifold.h>
 #include <ceres/rotation.h>
 
 #include <array>
@@ -13,20 +14,22 @@
 namespace geofusion {
 namespace {
 
-// A pose as Ceres parameter blocks: quaternion (Eigen order x, y, z, w) and translation.
+// A pose as one Ceres parameter block: quaternion (Eigen order x, y, z, w), then translation;
+// on the product of the unit-quaternion and Euclidean manifolds.
+using PoseManifold =
+    ceres::ProductManifold<ceres::EigenQuaternionManifold, ceres::EuclideanManifold<3>>;
 struct PoseBlock {
-  std::array<double, 4> q{};
-  std::array<double, 3> t{};
+  std::array<double, 7> x{};
+  double* data() { return x.data(); }
   void set(const Eigen::Isometry3d& T) {
-    Eigen::Quaterniond qq(T.linear());
-    qq.normalize();
-    q = {qq.x(), qq.y(), qq.z(), qq.w()};
-    t = {T.translation().x(), T.translation().y(), T.translation().z()};
+    Eigen::Quaterniond q(T.linear());
+    q.normalize();
+    x = {q.x(), q.y(), q.z(), q.w(), T.translation().x(), T.translation().y(), T.translation().z()};
   }
   Eigen::Isometry3d get() const {
     Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-    T.linear() = Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized().toRotationMatrix();
-    T.translation() = Eigen::Vector3d(t[0], t[1], t[2]);
+    T.linear() = Eigen::Quaterniond(x[3], x[0], x[1], x[2]).normalized().toRotationMatrix();
+    T.translation() = Eigen::Vector3d(x[4], x[5], x[6]);
     return T;
   }
 };
@@ -61,9 +64,9 @@ struct RelativePoseError {
   }
 
   template <typename T>
-  bool operator()(const T* qa, const T* ta, const T* qb, const T* tb, T* r) const {
-    const Eigen::Map<const Eigen::Quaternion<T>> Qa(qa), Qb(qb);
-    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> Ta(ta), Tb(tb);
+  bool operator()(const T* a, const T* b, T* r) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> Qa(a), Qb(b);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> Ta(a + 4), Tb(b + 4);
     const Eigen::Quaternion<T> q_pred = Qa.conjugate() * Qb;
     const Eigen::Matrix<T, 3, 1> t_pred = Qa.conjugate() * (Tb - Ta);
     const Eigen::Matrix<T, 3, 1> dt = t_pred - t_meas.cast<T>();
@@ -80,9 +83,11 @@ struct RelativePoseError {
   Eigen::Vector3d axis;
 };
 
-ceres::Solver::Summary solveQuietly(ceres::Problem* problem, ceres::LinearSolverType solver,
-                                    int max_iterations) {
+ceres::Solver::Summary solveQuietly(
+    ceres::Problem* problem, ceres::LinearSolverType solver, int max_iterations,
+    std::shared_ptr<ceres::ParameterBlockOrdering> ordering = nullptr) {
   ceres::Solver::Options options;
+  if (ordering) options.linear_solver_ordering = ordering;
   options.linear_solver_type = solver;
   options.max_num_iterations = max_iterations;
   options.num_threads = 1;
@@ -122,20 +127,17 @@ StageOneSummary optimizeStageOne(std::vector<Eigen::Isometry3d>* T_map_cam,
   ceres::Problem::Options problem_options;
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
-  ceres::EigenQuaternionManifold quaternion;
-  auto add_pose = [&](PoseBlock& b) {
-    problem.AddParameterBlock(b.q.data(), 4, &quaternion);
-    problem.AddParameterBlock(b.t.data(), 3);
-  };
+  PoseManifold manifold;
+  auto add_pose = [&](PoseBlock& b) { problem.AddParameterBlock(b.data(), 7, &manifold); };
   for (auto& c : cams) add_pose(c);
   const double wp_odo = 1.0 / config.odometry_sigma_position_m,
                wq_odo = 1.0 / config.odometry_sigma_rotation_rad;
   for (std::size_t i = 1; i < n_kf; ++i) {
     const Eigen::Isometry3d rel = T_odom_cam[i - 1].inverse() * T_odom_cam[i];
-    auto* cost = new ceres::AutoDiffCostFunction<RelativePoseError, 6, 4, 3, 4, 3>(
+    auto* cost = new ceres::AutoDiffCostFunction<RelativePoseError, 6, 7, 7>(
         new RelativePoseError(rel, wp_odo, wq_odo, false, Eigen::Vector3d::UnitZ()));
-    problem.AddResidualBlock(cost, makeLoss(config.odometry_loss), cams[i - 1].q.data(),
-                             cams[i - 1].t.data(), cams[i].q.data(), cams[i].t.data());
+    problem.AddResidualBlock(cost, makeLoss(config.odometry_loss), cams[i - 1].data(),
+                             cams[i].data());
   }
   std::vector<char> used(n_obj, 0);
   const double wp = 1.0 / config.measurement_sigma_position_m,
@@ -161,16 +163,29 @@ StageOneSummary optimizeStageOne(std::vector<Eigen::Isometry3d>* T_map_cam,
     Eigen::Vector3d axis;
     const bool free = freeAxis(model, &axis);
     const double s = std::sqrt(m.weight);
-    auto* cost = new ceres::AutoDiffCostFunction<RelativePoseError, 6, 4, 3, 4, 3>(
+    auto* cost = new ceres::AutoDiffCostFunction<RelativePoseError, 6, 7, 7>(
         new RelativePoseError(z, s * wp, s * wq, free, axis));
-    problem.AddResidualBlock(cost, makeLoss(config.measurement_loss), cam.q.data(), cam.t.data(),
-                             obj.q.data(), obj.t.data());
+    problem.AddResidualBlock(cost, makeLoss(config.measurement_loss), cam.data(), obj.data());
   }
-  problem.SetParameterBlockConstant(cams[0].q.data());
-  problem.SetParameterBlockConstant(cams[0].t.data());
+  // The first camera fixes the gauge; outside the window the cameras stay where they are.
+  const std::size_t first_free =
+      config.window_keyframes > 0 && n_kf > static_cast<std::size_t>(config.window_keyframes)
+          ? n_kf - static_cast<std::size_t>(config.window_keyframes)
+          : 1;
+  for (std::size_t i = 0; i < std::max<std::size_t>(1, first_free); ++i) {
+    problem.SetParameterBlockConstant(cams[i].data());
+  }
 
+  // Schur complement: the objects (no factor joins two of them) are eliminated first, the free
+  // cameras of the window remain as one small dense system.
+  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+  for (std::size_t j = 0; j < n_obj; ++j) {
+    if (!used[j]) continue;
+    ordering->AddElementToGroup(objs[j].data(), 0);
+  }
+  for (auto& c : cams) ordering->AddElementToGroup(c.data(), 1);
   const ceres::Solver::Summary s =
-      solveQuietly(&problem, ceres::SPARSE_SCHUR, config.max_iterations);
+      solveQuietly(&problem, ceres::DENSE_SCHUR, config.max_iterations, ordering);
   summary.solved = s.IsSolutionUsable();
   summary.iterations = static_cast<int>(s.iterations.size());
   summary.initial_cost = s.initial_cost;
@@ -212,8 +227,8 @@ struct ContactError {
   double w_p, w_q;
 
   template <typename T>
-  bool operator()(const T* qa, const T* ta, const T* qb, const T* tb, T* r) const {
-    const Posed<T> A = posed(qa, ta), B = posed(qb, tb);
+  bool operator()(const T* a, const T* b, T* r) const {
+    const Posed<T> A = posed(a, a + 4), B = posed(b, b + 4);
     const Eigen::Matrix<T, 3, 1> Ca = A.point(c_a), Na = A.dir(n_a), Cb = B.point(c_b),
                                  Nb = B.dir(n_b);
     const Eigen::Matrix<T, 3, 1> d = Cb - Ca;
@@ -268,7 +283,7 @@ StageTwoSummary optimizeStageTwo(std::vector<Eigen::Isometry3d>* T_world_obj,
   ceres::Problem::Options problem_options;
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
-  ceres::EigenQuaternionManifold quaternion;
+  PoseManifold manifold;
   std::vector<char> in_problem(n, 0);
   auto block = [&](int index) -> PoseBlock* {
     if (index < 0) return ground ? &ground_block : nullptr;
@@ -281,17 +296,14 @@ StageTwoSummary optimizeStageTwo(std::vector<Eigen::Isometry3d>* T_world_obj,
   auto add_object = [&](int index) {
     if (index < 0 || in_problem[static_cast<std::size_t>(index)]) return;
     PoseBlock& b = objs[static_cast<std::size_t>(index)];
-    problem.AddParameterBlock(b.q.data(), 4, &quaternion);
-    problem.AddParameterBlock(b.t.data(), 3);
+    problem.AddParameterBlock(b.data(), 7, &manifold);
     in_problem[static_cast<std::size_t>(index)] = 1;
     Eigen::Vector3d axis;
     const bool free = freeAxis(models[static_cast<std::size_t>(index)], &axis);
-    auto* prior =
-        new ceres::AutoDiffCostFunction<RelativePoseError, 6, 4, 3, 4, 3>(new RelativePoseError(
-            priors[static_cast<std::size_t>(index)], 1.0 / config.prior_sigma_position_m,
-            1.0 / config.prior_sigma_rotation_rad, free, axis));
-    problem.AddResidualBlock(prior, nullptr, identity.q.data(), identity.t.data(), b.q.data(),
-                             b.t.data());
+    auto* prior = new ceres::AutoDiffCostFunction<RelativePoseError, 6, 7, 7>(new RelativePoseError(
+        priors[static_cast<std::size_t>(index)], 1.0 / config.prior_sigma_position_m,
+        1.0 / config.prior_sigma_rotation_rad, free, axis));
+    problem.AddResidualBlock(prior, nullptr, identity.data(), b.data());
   };
   bool uses_constants = false;
   for (const FeatureContact& c : contacts) {
@@ -327,13 +339,11 @@ StageTwoSummary optimizeStageTwo(std::vector<Eigen::Isometry3d>* T_world_obj,
     add_object(swap ? c.object_a : c.object_b);
     if (a == &ground_block || b == &ground_block) uses_constants = true;
     if ((a == &ground_block || b == &ground_block) &&
-        !problem.HasParameterBlock(ground_block.q.data())) {
-      problem.AddParameterBlock(ground_block.q.data(), 4, &quaternion);
-      problem.AddParameterBlock(ground_block.t.data(), 3);
+        !problem.HasParameterBlock(ground_block.data())) {
+      problem.AddParameterBlock(ground_block.data(), 7, &manifold);
     }
-    auto* cost = new ceres::AutoDiffCostFunction<ContactError, 4, 4, 3, 4, 3>(new ContactError(e));
-    problem.AddResidualBlock(cost, makeLoss(config.contact_loss), a->q.data(), a->t.data(),
-                             b->q.data(), b->t.data());
+    auto* cost = new ceres::AutoDiffCostFunction<ContactError, 4, 7, 7>(new ContactError(e));
+    problem.AddResidualBlock(cost, makeLoss(config.contact_loss), a->data(), b->data());
     ++summary.contacts;
   }
   if (summary.contacts == 0) {
@@ -341,11 +351,9 @@ StageTwoSummary optimizeStageTwo(std::vector<Eigen::Isometry3d>* T_world_obj,
     for (std::size_t i = 0; i < n; ++i) (*T_world_obj)[i] = priors[i];
     return summary;
   }
-  problem.SetParameterBlockConstant(identity.q.data());
-  problem.SetParameterBlockConstant(identity.t.data());
+  problem.SetParameterBlockConstant(identity.data());
   if (uses_constants) {
-    problem.SetParameterBlockConstant(ground_block.q.data());
-    problem.SetParameterBlockConstant(ground_block.t.data());
+    problem.SetParameterBlockConstant(ground_block.data());
   }
   const ceres::Solver::Summary s =
       solveQuietly(&problem, ceres::SPARSE_NORMAL_CHOLESKY, config.max_iterations);

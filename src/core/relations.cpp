@@ -75,14 +75,21 @@ SupportPlane estimateSupportPlane(const DepthImageView& depth, const PinholeIntr
   out.size = hi - lo;
   out.centre = ax * mid.x() + ay * mid.y() + n * out.height;
   out.inliers = static_cast<int>(inliers.indices.size());
+  out.observations = 1;
   out.valid = true;
   return out;
 }
 
-void fuseSupportPlane(const SupportPlane& observed, SupportPlane* fused) {
+void fuseSupportPlane(const SupportPlane& observed, SupportPlane* fused,
+                      double max_height_difference_m) {
   if (!observed.valid) return;
   if (!fused->valid) {
     *fused = observed;
+    return;
+  }
+  if (std::abs(observed.height - fused->height) > max_height_difference_m) {
+    // Another surface (the floor, a shelf, a big box top): keep the better supported one.
+    if (observed.inliers > 2 * fused->inliers / std::max(1, fused->observations)) *fused = observed;
     return;
   }
   const double w0 = fused->inliers, w1 = observed.inliers, w = w0 + w1;
@@ -111,6 +118,7 @@ void fuseSupportPlane(const SupportPlane& observed, SupportPlane* fused) {
   fused->size = hi - lo;
   fused->centre = new_ax * mid.x() + fused->axes.col(1) * mid.y() + n * height;
   fused->inliers = static_cast<int>(std::min(w, 1e9));
+  fused->observations += observed.observations;
 }
 
 std::shared_ptr<ObjectModel> supportPlaneModel(const SupportPlane& plane,

@@ -1,5 +1,6 @@
 #include "geofusion/core/scene_estimator.h"
 
+#include "geofusion/core/clutter_scene.h"
 #include "geofusion/core/consistency.h"
 #include "geofusion/core/renderer.h"
 
@@ -106,7 +107,7 @@ ObjectEstimate SceneEstimator::estimateOf(const Track& track) const {
 std::vector<ObjectEstimate> SceneEstimator::objects() const {
   if (config_.method == Method::kFrameByFrame) return frame_objects_;
   std::vector<ObjectEstimate> out;
-  for (const Track& t : tracks_) out.push_back(estimateOf(t));
+  for (std::size_t j : reportedTracks()) out.push_back(estimateOf(tracks_[j]));
   return out;
 }
 
@@ -230,7 +231,7 @@ KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
     }
     std::vector<int> removed;
     if (usesConsistency()) {
-      removeFalsePositives(touched, &removed);
+      removeFalsePositives(touched, t, &removed);
       mergeOverlapping(&removed);
     }
     for (int& id : detection_object) {
@@ -258,14 +259,25 @@ KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
   return out;
 }
 
-void SceneEstimator::removeFalsePositives(const std::vector<int>& touched,
+std::vector<std::size_t> SceneEstimator::reportedTracks() const {
+  std::vector<std::size_t> out;
+  for (std::size_t j = 0; j < tracks_.size(); ++j)
+    if (tracks_[j].confirmed || !usesConsistency()) out.push_back(j);
+  return out;
+}
+
+void SceneEstimator::removeFalsePositives(const std::vector<int>& touched, int keyframe,
                                           std::vector<int>* removed) {
   std::vector<Track> kept;
   for (Track& tr : tracks_) {
-    const bool check = std::find(touched.begin(), touched.end(), tr.id) != touched.end();
-    const double f =
-        falsePositiveScore(tr.best_consistency, static_cast<int>(tr.observations.size()));
-    if (check && f > config_.association.eps_fp) {
+    if (std::find(touched.begin(), touched.end(), tr.id) != touched.end()) {
+      const double f =
+          falsePositiveScore(tr.best_consistency, static_cast<int>(tr.observations.size()));
+      tr.confirmed = f <= config_.association.eps_fp;
+    }
+    // A candidate above eps_fp is not in the map; unseen for long, it is dropped.
+    if (!tr.confirmed &&
+        keyframe - tr.last_keyframe > config_.association.candidate_timeout_keyframes) {
       removed->push_back(tr.id);
     } else {
       kept.push_back(std::move(tr));
@@ -285,6 +297,10 @@ void SceneEstimator::mergeOverlapping(std::vector<int>* removed) {
         Ta.translation() += Ta.linear() * A.box_centre;
         Tb.translation() += Tb.linear() * B.box_centre;
         if (boxCollisionRatio(Ta, A.box_half, Tb, B.box_half) <= config_.association.merge_ratio)
+          continue;
+        // Boxes of neighbours in clutter overlap; real duplicates also interpenetrate.
+        if (hullPenetration(*A.model, reportedPose(A), *B.model, reportedPose(B)) <
+            config_.association.merge_min_penetration_m)
           continue;
         const double fa = falsePositiveScore(A.best_consistency,
                                              static_cast<int>(A.observations.size())),
@@ -320,17 +336,19 @@ void SceneEstimator::runStageOne() {
   std::vector<Eigen::Isometry3d> objects;
   std::vector<const ObjectModel*> models;
   std::vector<StageOneMeasurement> measurements;
-  for (std::size_t j = 0; j < tracks_.size(); ++j) {
-    objects.push_back(tracks_[j].T_stage_one);
-    models.push_back(tracks_[j].model.get());
-    for (const Observation& o : tracks_[j].observations) {
-      measurements.push_back({o.keyframe, static_cast<int>(j), o.T_cam_obj, 1.0});
+  const std::vector<std::size_t> reported = reportedTracks();
+  for (std::size_t i = 0; i < reported.size(); ++i) {
+    const Track& tr = tracks_[reported[i]];
+    objects.push_back(tr.T_stage_one);
+    models.push_back(tr.model.get());
+    for (const Observation& o : tr.observations) {
+      measurements.push_back({o.keyframe, static_cast<int>(i), o.T_cam_obj, 1.0});
     }
   }
   const StageOneSummary s =
       optimizeStageOne(&T_map_cam_, T_odom_cam_, &objects, models, measurements, config_.stage_one);
   if (!s.solved) return;
-  for (std::size_t j = 0; j < tracks_.size(); ++j) tracks_[j].T_stage_one = objects[j];
+  for (std::size_t i = 0; i < reported.size(); ++i) tracks_[reported[i]].T_stage_one = objects[i];
 }
 
 void SceneEstimator::runRelationsAndStageTwo(const Keyframe* kf, StageTimings* timings) {
@@ -345,8 +363,9 @@ void SceneEstimator::runRelationsAndStageTwo(const Keyframe* kf, StageTimings* t
     }
   }
   // Relations from the refined poses of the previous keyframe (new objects: their stage I pose).
+  const std::vector<std::size_t> reported = reportedTracks();
   std::vector<PosedModel> posed;
-  for (const Track& tr : tracks_) posed.push_back({tr.model.get(), tr.T_refined});
+  for (std::size_t j : reported) posed.push_back({tracks_[j].model.get(), tracks_[j].T_refined});
   PosedModel ground{support_model_.get(), T_map_support_};
   contacts_ =
       inferRelations(posed, support_model_ ? &ground : nullptr, config_.gravity, config_.contacts);
@@ -355,14 +374,17 @@ void SceneEstimator::runRelationsAndStageTwo(const Keyframe* kf, StageTimings* t
   t0 = Clock::now();
   std::vector<Eigen::Isometry3d> poses, priors;
   std::vector<const ObjectModel*> models;
-  for (const Track& tr : tracks_) {
-    poses.push_back(tr.T_refined);
-    priors.push_back(tr.T_stage_one);
-    models.push_back(tr.model.get());
+  for (std::size_t j : reported) {
+    poses.push_back(tracks_[j].T_refined);
+    priors.push_back(tracks_[j].T_stage_one);
+    models.push_back(tracks_[j].model.get());
   }
   optimizeStageTwo(&poses, models, priors, contacts_, support_model_ ? &ground : nullptr,
                    config_.stage_two);
-  for (std::size_t j = 0; j < tracks_.size(); ++j) tracks_[j].T_refined = poses[j];
+  for (std::size_t i = 0; i < reported.size(); ++i) tracks_[reported[i]].T_refined = poses[i];
+  // Candidates follow their stage I / initial pose.
+  for (Track& tr : tracks_)
+    if (!tr.confirmed) tr.T_refined = tr.T_stage_one;
   if (timings) timings->stage_two_ms = msSince(t0);
 }
 

@@ -206,10 +206,9 @@ int main(int argc, char** argv) {
   const PinholeIntrinsics K;
   // What makes a cached scene valid: every option that changes its files.
   std::ostringstream request;
-  request << "generator v1; suite " << suite.name << "; models " << models.name() << " ("
-          << models.size() << " classes); keyframes " << suite.keyframes << "; image_every "
-          << suite.image_every << "; detector " << opt.detector << "; depth " << opt.depth_encoding
-          << "; lz4 " << opt.compress << "\n";
+  request << describeSuite(suite) << "; models " << models.name() << " (" << models.size()
+          << " classes); detector " << opt.detector << "; depth " << opt.depth_encoding << "; lz4 "
+          << opt.compress << "\n";
 
   std::cout << "generate_dataset: suite " << suite.name << " (" << suite.scenes.size()
             << " scenes, " << suite.keyframes << " keyframes each, images every "

@@ -1,7 +1,7 @@
 // The scene estimator end to end on a generated clutter sequence (built-in primitives): the four
 // methods from one code path, object count, false-positive removal and pose error.
 #include "geofusion/core/dataset.h"
-#include "geofusion/core/frame_by_frame.h"
+#include "geofusion/core/evaluation.h"
 #include "geofusion/core/metrics.h"
 #include "geofusion/core/renderer.h"
 #include "geofusion/core/scene_estimator.h"
@@ -60,61 +60,13 @@ const Sequence& demoSequence() {
 }
 
 Keyframe keyframeOf(const Sequence& s, std::size_t k) {
-  Keyframe kf;
-  kf.stamp_s = s.poses[k].stamp_s;
-  kf.T_odom_cam =
-      s.poses[k].T_odom_base * s.poses[k].T_base_link * RobotGeometry::cameraLinkToOptical();
-  kf.depth = DepthImageView{s.frames[k].images.depth.data(), kf.K.width, kf.K.height};
-  const FrameByFrame checker;
-  for (const RawDetection& raw : s.frames[k].detections) {
-    ObjectMeasurement m;
-    SkipReason why;
-    if (checker.check(raw, &m, &why)) kf.detections.push_back(m);
-  }
-  return kf;
+  return makeKeyframe(s.poses[k], s.frames[k], PinholeIntrinsics());
 }
 
-struct Score {
-  int true_positives = 0, false_positives = 0, objects = 0;
-  double mean_adds = 0.0;
-};
-
-// Matches estimated objects (in the map frame, which starts at the first odometry pose; here
-// odom = map at the first frame) to true objects of the same class within 5 cm ADD-S.
-Score scoreMap(const Sequence& s, const std::vector<ObjectEstimate>& objects) {
-  Score sc;
-  std::vector<bool> taken(s.scene.objects.size(), false);
-  for (const ObjectEstimate& o : objects) {
-    ++sc.objects;
-    double best = 1e9;
-    int best_i = -1;
-    for (std::size_t i = 0; i < s.scene.objects.size(); ++i) {
-      if (taken[i] || s.scene.objects[i].model->name != o.model->name) continue;
-      const double e = addsError(o.model->points, o.T_map_obj, s.scene.objects[i].T_world_obj);
-      if (e < best) best = e, best_i = static_cast<int>(i);
-    }
-    if (best_i >= 0 && best < 0.05) {
-      taken[static_cast<std::size_t>(best_i)] = true;
-      ++sc.true_positives;
-      sc.mean_adds += best;
-    } else {
-      ++sc.false_positives;
-    }
-  }
-  if (sc.true_positives) sc.mean_adds /= sc.true_positives;
-  return sc;
-}
+using Score = MapScore;
 
 int objectsSeenOften(const Sequence& s, int min_frames) {
-  int n = 0;
-  for (std::size_t i = 0; i < s.scene.objects.size(); ++i) {
-    int seen = 0;
-    for (const auto& f : s.frames) {
-      for (int truth : f.detection_truth) seen += truth == static_cast<int>(i);
-    }
-    n += seen >= min_frames;
-  }
-  return n;
+  return objectsDetectedInFrames(s.scene, s.frames, min_frames);
 }
 
 Score run(Method method, std::vector<KeyframeResult>* results = nullptr,
@@ -132,7 +84,7 @@ Score run(Method method, std::vector<KeyframeResult>* results = nullptr,
     if (results) results->push_back(r);
   }
   const KeyframeResult final = estimator.finish();
-  return scoreMap(s, final.objects);
+  return scoreMap(s.scene, final.objects);
 }
 
 TEST(SceneEstimator, MethodNames) {
@@ -159,7 +111,7 @@ TEST(SceneEstimator, GeoFusionFindsTheObjectsAndDropsFalsePositives) {
   std::printf(
       "GeoFusion: %d objects (%d true, %d false; %d true objects seen in >= 5 frames), "
       "mean ADD-S %.2f mm\n",
-      geo.objects, geo.true_positives, geo.false_positives, expected, 1000 * geo.mean_adds);
+      geo.objects, geo.true_positives, geo.false_positives, expected, 1000 * geo.mean_adds_m);
   EXPECT_GE(geo.true_positives, expected - 1);
   EXPECT_LE(geo.false_positives, 1);
   double worst = 0;
@@ -194,10 +146,10 @@ TEST(SceneEstimator, GeoFusionIsMoreAccurateThanFrameByFrame) {
   std::printf(
       "mean ADD-S: FbF %.2f mm, B-SLAM %.2f mm (%d/%d), R-Front %.2f mm (%d/%d), "
       "GeoFusion %.2f mm (%d/%d)\n",
-      1000 * fbf_mean, 1000 * bslam.mean_adds, bslam.true_positives, bslam.objects,
-      1000 * rfront.mean_adds, rfront.true_positives, rfront.objects, 1000 * geo.mean_adds,
+      1000 * fbf_mean, 1000 * bslam.mean_adds_m, bslam.true_positives, bslam.objects,
+      1000 * rfront.mean_adds_m, rfront.true_positives, rfront.objects, 1000 * geo.mean_adds_m,
       geo.true_positives, geo.objects);
-  EXPECT_LT(geo.mean_adds, fbf_mean);
+  EXPECT_LT(geo.mean_adds_m, fbf_mean);
 }
 
 TEST(SceneEstimator, FiveObjectsWithTwentyPercentFalsePositives) {
@@ -223,11 +175,11 @@ TEST(SceneEstimator, JointAssignmentIsAtLeastAsGoodAsTheGreedyOrder) {
   const Score greedy = run(Method::kGeoFusion, nullptr,
                            [](EstimatorConfig* c) { c->association.joint_assignment = false; });
   std::printf("joint: %d true / %d objects, %.2f mm; greedy: %d / %d, %.2f mm\n",
-              joint.true_positives, joint.objects, 1000 * joint.mean_adds, greedy.true_positives,
-              greedy.objects, 1000 * greedy.mean_adds);
+              joint.true_positives, joint.objects, 1000 * joint.mean_adds_m, greedy.true_positives,
+              greedy.objects, 1000 * greedy.mean_adds_m);
   EXPECT_GE(joint.true_positives, greedy.true_positives);
   EXPECT_LE(joint.false_positives, greedy.false_positives);
-  EXPECT_LE(joint.mean_adds, greedy.mean_adds + 0.0005);
+  EXPECT_LE(joint.mean_adds_m, greedy.mean_adds_m + 0.0005);
 }
 
 TEST(SceneEstimator, DuplicateOfASymmetricObjectIsMerged) {

@@ -17,10 +17,16 @@ struct AssociationConfig {
   double sigma_rotation_rad = 0.5;  ///< Q: pose factor rotation std
   /// Below this likelihood a measurement starts a new object (eps_new).
   double eps_new = 0.05;
-  /// Objects whose false-positive score exceeds this are removed (eps_fp).
+  /// Objects whose false-positive score exceeds this are not in the map (eps_fp): they stay
+  /// candidates, gathering measurements, and are deleted when not observed for
+  /// candidate_timeout_keyframes keyframes.
   double eps_fp = 0.55;
-  /// Objects whose oriented boxes overlap by more than this collision ratio are merged.
+  int candidate_timeout_keyframes = 10;
+  /// Objects whose oriented boxes overlap by more than this collision ratio are merged, ...
   double merge_ratio = 0.4;
+  /// ... when their convex hulls also interpenetrate by at least this (FCL), metres: the boxes
+  /// of neighbours in clutter overlap, duplicates and false positives interpenetrate.
+  double merge_min_penetration_m = 0.01;
   /// true: one Hungarian assignment per keyframe (all measurements jointly); false: the paper's
   /// greedy order (a later measurement that wants a taken object starts a new one).
   bool joint_assignment = true;

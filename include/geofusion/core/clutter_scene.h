@@ -64,6 +64,10 @@ double maxPenetration(const ClutterScene& scene, std::pair<int, int>* pair = nul
 /// FCL: distance between two objects' convex hulls (-1 = the table); 0 when they overlap.
 double hullDistance(const ClutterScene& scene, int a, int b);
 
+/// FCL: interpenetration depth of two posed models' convex collision hulls (0 when apart).
+double hullPenetration(const ObjectModel& a, const Eigen::Isometry3d& T_world_a,
+                       const ObjectModel& b, const Eigen::Isometry3d& T_world_b);
+
 /// The ground-truth contact graph of the scene's current poses (FCL gate + feature contacts).
 std::vector<FeatureContact> groundTruthContacts(const ClutterScene& scene,
                                                 const ClutterConfig& config);

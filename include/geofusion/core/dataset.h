@@ -38,6 +38,13 @@ struct SuiteSpec {
   bool isKeyframe(int frame) const { return image_every > 0 && frame % image_every == 0; }
 };
 
+/// Bumped whenever the generator's output for the same request changes (cached scenes made by
+/// another version are remade).
+constexpr int kGeneratorVersion = 2;
+
+/// Every setting of a suite that shapes its data, one line (the cache key of generated scenes).
+std::string describeSuite(const SuiteSpec& suite);
+
 /// The suites the package knows: "demo" (one small scene, built-in primitives, seconds to make)
 /// and "bench" (6 scenes of about 18 YCB-Video objects, 200 keyframes each). False for others.
 bool suiteByName(const std::string& name, SuiteSpec* suite);

@@ -28,8 +28,11 @@ struct StageOneConfig {
   double odometry_sigma_rotation_rad = 0.004;
   RobustLoss measurement_loss;
   RobustLoss odometry_loss{"none", 1.0};
-  int max_iterations = 20;
+  int max_iterations = 10;     ///< warm-started: a few iterations converge
   int every_n_keyframes = 10;  ///< run every N keyframes (the paper: 10)
+  /// Only the latest N keyframe poses are free (older ones fixed, their measurements still
+  /// constrain the objects); 0 = all. Bounds the time of a run on long sequences.
+  int window_keyframes = 60;
 };
 
 /// One object measurement z_t^k in stage I: keyframe t observes object j at T_cam_obj.

@@ -34,7 +34,8 @@ struct SupportPlane {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();    ///< centre of the inliers' extent
   Eigen::Vector2d size = Eigen::Vector2d::Zero();      ///< extent of the inliers in the plane
   Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();  ///< columns: in-plane x, y, normal
-  int inliers = 0;
+  int inliers = 0;                                     ///< summed over the fused estimates
+  int observations = 0;                                ///< keyframes fused
 };
 
 /// The dominant plane within max_tilt of horizontal among the keyframe's depth points (in the map
@@ -44,8 +45,11 @@ SupportPlane estimateSupportPlane(const DepthImageView& depth, const PinholeIntr
                                   const Eigen::Vector3d& gravity,
                                   const SupportPlaneConfig& config = SupportPlaneConfig());
 
-/// Fuses a new estimate into a running one (inlier-weighted height, union of the extents).
-void fuseSupportPlane(const SupportPlane& observed, SupportPlane* fused);
+/// Fuses a new estimate into a running one (inlier-weighted height, union of the extents). An
+/// estimate more than `max_height_difference_m` away is another surface: it replaces the fused
+/// one only when it has more than twice its inliers.
+void fuseSupportPlane(const SupportPlane& observed, SupportPlane* fused,
+                      double max_height_difference_m = 0.03);
 
 /// The grounded object of a plane: a slab (box model) whose top face is the plane; its model
 /// frame at the slab centre (returned pose).

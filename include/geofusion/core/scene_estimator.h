@@ -125,6 +125,7 @@ class SceneEstimator {
     std::vector<Observation> observations;
     double best_consistency = 0.0;
     int first_keyframe = -1, last_keyframe = -1;
+    bool confirmed = false;  ///< false-positive score at most eps_fp: part of the map
     Eigen::Vector3d box_centre = Eigen::Vector3d::Zero();  ///< model-frame bounding box
     Eigen::Vector3d box_half = Eigen::Vector3d::Zero();
   };
@@ -133,7 +134,10 @@ class SceneEstimator {
   bool optimises() const;
   ObjectEstimate estimateOf(const Track& track) const;
   const Eigen::Isometry3d& reportedPose(const Track& track) const;
-  void removeFalsePositives(const std::vector<int>& touched, std::vector<int>* removed);
+  /// Tracks in the map: confirmed ones (all for methods without false-positive removal).
+  std::vector<std::size_t> reportedTracks() const;
+  void removeFalsePositives(const std::vector<int>& touched, int keyframe,
+                            std::vector<int>* removed);
   void mergeOverlapping(std::vector<int>* removed);
   void runStageOne();
   void runRelationsAndStageTwo(const Keyframe* keyframe, StageTimings* timings);

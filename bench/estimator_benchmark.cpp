@@ -1,0 +1,226 @@
+// The scene estimator on a generated bench-like sequence, all four methods: per-stage time a
+// keyframe (p50 / p95 / max, one core) and the final map against ground truth. A benchmark that
+// prints figures, not a test; the full benchmark (COCO mAP, ADD-S curves, contacts) is the
+// benchmark tool's.
+//
+//   estimator_benchmark [--models DIR] [--objects 18] [--keyframes 100] [--seed 101]
+//                       [--detector densefusion|posecnn]
+//
+// DIR holds the YCB-Video models (default ../shared/data/ycb_video beside the source tree);
+// without them the built-in primitives are used and the output says so.
+#include "geofusion/core/dataset.h"
+#include "geofusion/core/evaluation.h"
+#include "geofusion/core/metrics.h"
+#include "geofusion/core/renderer.h"
+#include "geofusion/core/scene_estimator.h"
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+namespace {
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const std::size_t i = std::min(v.size() - 1, static_cast<std::size_t>(p * (v.size() - 1) + 0.5));
+  return v[i];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace geofusion;
+  std::string models_dir = std::string(GEOFUSION_SOURCE_DIR) + "/../shared/data/ycb_video";
+  int objects = 18, keyframes = 100;
+  unsigned seed = 101;
+  std::string detector = "densefusion", only;
+  ConsistencyConfig consistency;
+  AssociationConfig association;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--method" && i + 1 < argc) {
+      only = argv[++i];
+    } else if (a == "--eps-res" && i + 1 < argc) {
+      consistency.eps_res = std::atof(argv[++i]);
+    } else if (a == "--eps-out" && i + 1 < argc) {
+      consistency.eps_out = std::atof(argv[++i]);
+    } else if (a == "--inlier-centre" && i + 1 < argc) {
+      consistency.inlier.centre = std::atof(argv[++i]);
+    } else if (a == "--outlier-centre" && i + 1 < argc) {
+      consistency.outlier.centre = std::atof(argv[++i]);
+    } else if (a == "--eps-fp" && i + 1 < argc) {
+      association.eps_fp = std::atof(argv[++i]);
+    } else if (a == "--eps-new" && i + 1 < argc) {
+      association.eps_new = std::atof(argv[++i]);
+    } else if (a == "--models" && i + 1 < argc) {
+      models_dir = argv[++i];
+    } else if (a == "--objects" && i + 1 < argc) {
+      objects = std::atoi(argv[++i]);
+    } else if (a == "--keyframes" && i + 1 < argc) {
+      keyframes = std::atoi(argv[++i]);
+    } else if (a == "--seed" && i + 1 < argc) {
+      seed = static_cast<unsigned>(std::atoi(argv[++i]));
+    } else if (a == "--detector" && i + 1 < argc) {
+      detector = argv[++i];
+    } else {
+      std::fprintf(stderr,
+                   "usage: %s [--models DIR] [--objects N] [--keyframes N] [--seed S] "
+                   "[--detector densefusion|posecnn] [--method NAME] [--eps-res M] [--eps-out M] "
+                   "[--inlier-centre X] [--outlier-centre X] [--eps-fp X] [--eps-new X]\n",
+                   argv[0]);
+      return 2;
+    }
+  }
+  ModelSet models;
+  std::vector<std::string> errors;
+  const bool ycb =
+      ModelSet::load(std::string(GEOFUSION_SOURCE_DIR) + "/config/models/ycb_video.yaml",
+                     models_dir, &models, &errors) &&
+      models.size() > 0;
+  if (!ycb) {
+    models = ModelSet::builtinPrimitives();
+    std::printf("YCB-Video models not found in %s: using the built-in primitives\n",
+                models_dir.c_str());
+  }
+  SuiteSpec suite;
+  suiteByName("bench", &suite);
+  if (detector == "posecnn") suite.detector = DetectorModel::posecnn();
+  SceneSpec spec{"benchmark", seed, objects};
+  ClutterScene scene;
+  std::string report;
+  unsigned used = 0;
+  if (!makeSuiteScene(suite, spec, models, &scene, &used, &report)) {
+    std::fprintf(stderr, "scene: %s\n", report.c_str());
+    return 1;
+  }
+  TrajectoryConfig traj = suite.trajectory;
+  traj.frames = keyframes;
+  traj.rate_hz = 5.0;
+  std::vector<FramePose> poses = makeTrajectory(scene, traj, seed);
+  addOdometryDrift(&poses, suite.odometry, seed + 1000);
+  const PinholeIntrinsics K;
+  std::vector<SequenceFrame> frames;
+  {
+    SequenceRenderer renderer(scene, K);
+    std::mt19937 rng(seed + 2000);
+    for (const FramePose& p : poses)
+      frames.push_back(renderer.render(p, suite.depth, suite.detector, models, rng));
+  }
+  int detections = 0;
+  for (const auto& f : frames) detections += static_cast<int>(f.detections.size());
+  std::printf("scene: %zu %s objects (seed %u), %d keyframes, %.1f detections a keyframe (%s)\n",
+              scene.objects.size(), ycb ? "YCB-Video" : "primitive", used, keyframes,
+              static_cast<double>(detections) / keyframes, detector.c_str());
+  std::printf("objects detected (true class) in >= 5 keyframes: %d\n\n",
+              objectsDetectedInFrames(scene, frames, 5));
+
+  // FbF reference: each keyframe's true-class detections.
+  std::vector<double> fbf;
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    for (std::size_t d = 0; d < frames[k].detections.size(); ++d) {
+      const int t = frames[k].detection_truth[d];
+      if (t < 0) continue;
+      const SceneObject& o = scene.objects[static_cast<std::size_t>(t)];
+      if (o.model->name != frames[k].detections[d].class_name) continue;
+      Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+      T.linear() = frames[k].detections[d].orientation_cam.normalized().toRotationMatrix();
+      T.translation() = frames[k].detections[d].position_cam;
+      fbf.push_back(
+          addsError(o.model->points, T, poses[k].T_map_optical.inverse() * o.T_world_obj));
+    }
+  }
+  std::printf(
+      "FbF (per keyframe, true detections): ADD-S mean %.2f mm, < 1 cm %.1f %%, < 2 cm %.1f %%\n\n",
+      1000.0 *
+          [&] {
+            double s = 0;
+            for (double e : fbf) s += e;
+            return s / std::max<std::size_t>(1, fbf.size());
+          }(),
+      100.0 * shareBelow(fbf, 0.01), 100.0 * shareBelow(fbf, 0.02));
+
+  std::printf("%-10s %7s %5s %5s %9s %7s %7s | ms a keyframe p50/p95/max: %s\n", "method",
+              "objects", "true", "false", "ADD-S mm", "<1cm %", "<2cm %",
+              "consistency  association  stage I  relations  stage II  total");
+  auto shared = std::make_shared<OffscreenRenderer>();
+  for (Method method : {Method::kFrameByFrame, Method::kBaselineSlam, Method::kRobustFrontEnd,
+                        Method::kGeoFusion}) {
+    Method wanted;
+    if (!only.empty() && parseMethod(only, &wanted) && wanted != method) continue;
+    EstimatorConfig config;
+    config.method = method;
+    config.consistency = consistency;
+    config.association = association;
+    SceneEstimator estimator(models, config, shared);
+    std::vector<double> t_cons, t_assoc, t_s1, t_rel, t_s2, t_total;
+    std::vector<std::vector<double>> object_consistency(scene.objects.size());
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+      const KeyframeResult r = estimator.addKeyframe(makeKeyframe(poses[k], frames[k], K));
+      for (std::size_t d = 0;
+           d < r.detection_consistency.size() && d < frames[k].detection_truth.size(); ++d) {
+        const int t = frames[k].detection_truth[d];
+        if (t >= 0)
+          object_consistency[static_cast<std::size_t>(t)].push_back(r.detection_consistency[d]);
+      }
+      t_cons.push_back(r.timings.consistency_ms);
+      t_assoc.push_back(r.timings.association_ms);
+      t_s1.push_back(r.timings.stage_one_ms);
+      t_rel.push_back(r.timings.relations_ms);
+      t_s2.push_back(r.timings.stage_two_ms);
+      t_total.push_back(r.timings.total_ms);
+    }
+    const KeyframeResult final = estimator.finish();
+    std::string times;
+    char buf[64];
+    for (const auto* v : {&t_cons, &t_assoc, &t_s1, &t_rel, &t_s2, &t_total}) {
+      std::snprintf(buf, sizeof(buf), "%.1f/%.1f/%.1f  ", percentile(*v, 0.5), percentile(*v, 0.95),
+                    percentile(*v, 1.0));
+      times += buf;
+    }
+    if (method == Method::kFrameByFrame) {
+      std::printf("%-10s %7s %5s %5s %9s %7s %7s | %s\n", toString(method), "-", "-", "-", "-", "-",
+                  "-", times.c_str());
+      continue;
+    }
+    const MapScore s = scoreMap(scene, final.objects);
+    if (method == Method::kGeoFusion && s.true_positives < static_cast<int>(scene.objects.size())) {
+      // Which true objects the map lacks, and how consistent their detections were.
+      for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+        bool found = false;
+        for (const auto& o : final.objects)
+          found |= o.model->name == scene.objects[i].model->name &&
+                   addsError(o.model->points, o.T_map_obj, scene.objects[i].T_world_obj) < 0.05;
+        if (found) continue;
+        const auto& c = object_consistency[i];
+        double mx = 0, mean = 0;
+        for (double v : c) mx = std::max(mx, v), mean += v / std::max<std::size_t>(1, c.size());
+        std::printf("  not in the map: %s, %zu detections, f_gc mean %.2f max %.2f\n",
+                    scene.objects[i].model->name.c_str(), c.size(), mean, mx);
+        for (const auto& o : final.objects) {
+          if (o.model->name != scene.objects[i].model->name) continue;
+          std::printf("    map has one %.1f mm ADD-S away (n %d, R %.2f)\n",
+                      1000 * addsError(o.model->points, o.T_map_obj, scene.objects[i].T_world_obj),
+                      o.measurements, o.best_consistency);
+        }
+      }
+    }
+    std::printf("%-10s %7d %5d %5d %9.2f %7.1f %7.1f | %s\n", toString(method), s.objects,
+                s.true_positives, s.false_positives, 1000 * s.mean_adds_m,
+                100 * shareBelow(s.adds_m, 0.01), 100 * shareBelow(s.adds_m, 0.02), times.c_str());
+    if (method == Method::kGeoFusion) {
+      std::printf("GeoFusion final map: %zu contacts, support plane %s at %.3f m\n",
+                  final.contacts.size(), estimator.supportPlane().valid ? "found" : "not found",
+                  estimator.supportPlane().height);
+    }
+  }
+  struct rusage usage;
+  getrusage(RUSAGE_SELF, &usage);
+  std::printf("peak memory %.0f MB\n", usage.ru_maxrss / 1024.0);
+  return 0;
+}
