@@ -189,6 +189,24 @@ int main(int argc, char** argv) {
       continue;
     }
     const MapScore s = scoreMap(scene, final.objects);
+    if (method == Method::kGeoFusion) {
+      // What the map's false objects are: the nearest true object of their class, if any.
+      std::vector<bool> matched(final.objects.size(), false);
+      for (std::size_t k = 0; k < final.objects.size(); ++k) {
+        const auto& o = final.objects[k];
+        double best = 1e9;
+        int nearest = -1;
+        for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+          const auto& t = scene.objects[i];
+          if (t.model->name != o.model->name) continue;
+          const double e = addsError(o.model->points, o.T_map_obj, t.T_world_obj);
+          if (e < best) best = e, nearest = static_cast<int>(i);
+        }
+        std::printf("  map object %d: %s, n %d, R %.2f, nearest true of its class #%d at %.1f mm\n",
+                    o.id, o.model->name.c_str(), o.measurements, o.best_consistency, nearest,
+                    best > 1e8 ? -1.0 : 1000 * best);
+      }
+    }
     if (method == Method::kGeoFusion && s.true_positives < static_cast<int>(scene.objects.size())) {
       // Which true objects the map lacks, and how consistent their detections were.
       for (std::size_t i = 0; i < scene.objects.size(); ++i) {

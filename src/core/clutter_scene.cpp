@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <memory>
 #include <random>
 #include <sstream>
 
@@ -339,16 +341,29 @@ bool makeClutterScene(const ModelSet& models, const ClutterConfig& config, unsig
   return scene->max_penetration_m <= config.max_penetration_m;
 }
 
-double hullPenetration(const ObjectModel& a, const Eigen::Isometry3d& T_world_a,
-                       const ObjectModel& b, const Eigen::Isometry3d& T_world_b) {
-  // Models from a ModelSet carry their hull; others get one made here.
-  const TriangleMesh hull_a = a.collision_hull.empty() ? collisionHull(a.mesh) : TriangleMesh();
-  const TriangleMesh hull_b = b.collision_hull.empty() ? collisionHull(b.mesh) : TriangleMesh();
-  fcl::CollisionObjectd oa(fclHull(a.collision_hull.empty() ? hull_a : a.collision_hull),
-                           fcl::Transform3d(T_world_a.matrix()));
-  fcl::CollisionObjectd ob(fclHull(b.collision_hull.empty() ? hull_b : b.collision_hull),
-                           fcl::Transform3d(T_world_b.matrix()));
-  return penetration(&oa, &ob);
+struct HullCollider::Impl {
+  std::map<std::shared_ptr<const ObjectModel>, std::shared_ptr<fcl::CollisionGeometryd>> hulls;
+  std::shared_ptr<fcl::CollisionGeometryd> hull(const std::shared_ptr<const ObjectModel>& m) {
+    auto it = hulls.find(m);
+    if (it != hulls.end()) return it->second;
+    // Models from a ModelSet carry their hull; others get one made here.
+    auto g = fclHull(m->collision_hull.empty() ? collisionHull(m->mesh) : m->collision_hull);
+    hulls[m] = g;
+    return g;
+  }
+};
+
+HullCollider::HullCollider() : impl_(std::make_unique<Impl>()) {}
+HullCollider::~HullCollider() = default;
+
+double HullCollider::penetration(const std::shared_ptr<const ObjectModel>& a,
+                                 const Eigen::Isometry3d& T_world_a,
+                                 const std::shared_ptr<const ObjectModel>& b,
+                                 const Eigen::Isometry3d& T_world_b) {
+  if (!a || !b) return 0.0;
+  fcl::CollisionObjectd oa(impl_->hull(a), fcl::Transform3d(T_world_a.matrix()));
+  fcl::CollisionObjectd ob(impl_->hull(b), fcl::Transform3d(T_world_b.matrix()));
+  return geofusion::penetration(&oa, &ob);
 }
 
 }  // namespace geofusion

@@ -51,6 +51,7 @@ SceneEstimator::SceneEstimator(const ModelSet& models, const EstimatorConfig& co
   for (const auto& m : models.models()) models_[m->name] = m;
   if (!renderer) renderer = std::make_shared<OffscreenRenderer>();
   scorer_ = std::make_unique<ConsistencyScorer>(std::move(renderer), config.consistency);
+  collider_ = std::make_unique<HullCollider>();
 }
 
 SceneEstimator::~SceneEstimator() = default;
@@ -299,8 +300,12 @@ void SceneEstimator::mergeOverlapping(std::vector<int>* removed) {
         if (boxCollisionRatio(Ta, A.box_half, Tb, B.box_half) <= config_.association.merge_ratio)
           continue;
         // Boxes of neighbours in clutter overlap; real duplicates also interpenetrate.
-        if (hullPenetration(*A.model, reportedPose(A), *B.model, reportedPose(B)) <
-            config_.association.merge_min_penetration_m)
+        // Thin objects (markers, scissors) cannot interpenetrate by much: the bound scales down
+        // with the thinner object's smallest extent.
+        const double thinnest = 2.0 * std::min(A.box_half.minCoeff(), B.box_half.minCoeff());
+        const double needed = std::min(config_.association.merge_min_penetration_m,
+                                       config_.association.merge_thin_fraction * thinnest);
+        if (collider_->penetration(A.model, reportedPose(A), B.model, reportedPose(B)) < needed)
           continue;
         const double fa = falsePositiveScore(A.best_consistency,
                                              static_cast<int>(A.observations.size())),

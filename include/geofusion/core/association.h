@@ -27,6 +27,8 @@ struct AssociationConfig {
   /// ... when their convex hulls also interpenetrate by at least this (FCL), metres: the boxes
   /// of neighbours in clutter overlap, duplicates and false positives interpenetrate.
   double merge_min_penetration_m = 0.01;
+  /// ... or at least this share of the thinner object's smallest extent, if less.
+  double merge_thin_fraction = 0.3;
   /// true: one Hungarian assignment per keyframe (all measurements jointly); false: the paper's
   /// greedy order (a later measurement that wants a taken object starts a new one).
   bool joint_assignment = true;

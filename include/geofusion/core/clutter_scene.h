@@ -65,8 +65,20 @@ double maxPenetration(const ClutterScene& scene, std::pair<int, int>* pair = nul
 double hullDistance(const ClutterScene& scene, int a, int b);
 
 /// FCL: interpenetration depth of two posed models' convex collision hulls (0 when apart).
-double hullPenetration(const ObjectModel& a, const Eigen::Isometry3d& T_world_a,
-                       const ObjectModel& b, const Eigen::Isometry3d& T_world_b);
+/// Keeps each model's FCL geometry (keyed by the model, which it keeps alive) for repeated use.
+class HullCollider {
+ public:
+  HullCollider();
+  ~HullCollider();
+  double penetration(const std::shared_ptr<const ObjectModel>& a,
+                     const Eigen::Isometry3d& T_world_a,
+                     const std::shared_ptr<const ObjectModel>& b,
+                     const Eigen::Isometry3d& T_world_b);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 /// The ground-truth contact graph of the scene's current poses (FCL gate + feature contacts).
 std::vector<FeatureContact> groundTruthContacts(const ClutterScene& scene,

@@ -24,6 +24,7 @@ namespace geofusion {
 
 class OffscreenRenderer;
 class ConsistencyScorer;
+class HullCollider;
 
 /// FbF: each keyframe's detections as they are. B-SLAM: association by detector confidence, no
 /// false-positive removal or merging, stage I only. R-Front: GeoFusion's association (geometric
@@ -146,6 +147,7 @@ class SceneEstimator {
   EstimatorConfig config_;
   std::map<std::string, std::shared_ptr<const ObjectModel>> models_;
   std::unique_ptr<ConsistencyScorer> scorer_;
+  std::unique_ptr<HullCollider> collider_;
   std::vector<Track> tracks_;
   int next_id_ = 0;
   std::vector<Eigen::Isometry3d> T_map_cam_, T_odom_cam_;
