@@ -1,5 +1,10 @@
 #include "geofusion/ros/conversions.h"
 
+#include <sensor_msgs/image_encodings.h>
+
+#include <cmath>
+#include <cstring>
+
 namespace geofusion {
 
 RawDetection fromMsg(const geofusion::Detection& msg) {
@@ -54,6 +59,53 @@ geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& T) {
   p.orientation.y = q.y();
   p.orientation.z = q.z();
   return p;
+}
+
+const char* depthProblem(const sensor_msgs::Image& depth) {
+  namespace enc = sensor_msgs::image_encodings;
+  if (depth.width == 0 || depth.height == 0 || depth.data.empty()) return "empty depth image";
+  if (depth.encoding != enc::TYPE_32FC1 && depth.encoding != enc::TYPE_16UC1) {
+    return "depth encoding is neither 32FC1 (metres) nor 16UC1 (millimetres)";
+  }
+  const std::size_t pixel = depth.encoding == enc::TYPE_32FC1 ? 4 : 2;
+  if (depth.step < depth.width * pixel ||
+      depth.data.size() < static_cast<std::size_t>(depth.step) * depth.height) {
+    return "depth data shorter than step * height";
+  }
+  return nullptr;
+}
+
+bool depthToMetres(const sensor_msgs::Image& depth, std::vector<float>* metres) {
+  if (depthProblem(depth)) return false;
+  const bool is_float = depth.encoding == sensor_msgs::image_encodings::TYPE_32FC1;
+  metres->assign(static_cast<std::size_t>(depth.width) * depth.height, 0.f);
+  for (uint32_t v = 0; v < depth.height; ++v) {
+    const uint8_t* row = depth.data.data() + static_cast<std::size_t>(v) * depth.step;
+    for (uint32_t u = 0; u < depth.width; ++u) {
+      float z;
+      if (is_float) {
+        std::memcpy(&z, row + 4 * u, sizeof(float));
+      } else {
+        uint16_t mm;
+        std::memcpy(&mm, row + 2 * u, sizeof(uint16_t));
+        z = static_cast<float>(mm) * 0.001f;
+      }
+      (*metres)[static_cast<std::size_t>(v) * depth.width + u] =
+          std::isfinite(z) && z > 0.f ? z : 0.f;
+    }
+  }
+  return true;
+}
+
+PinholeIntrinsics intrinsicsFromCameraInfo(const sensor_msgs::CameraInfo& info) {
+  PinholeIntrinsics K;
+  K.width = static_cast<int>(info.width);
+  K.height = static_cast<int>(info.height);
+  K.fx = info.K[0];
+  K.fy = info.K[4];
+  K.cx = info.K[2];
+  K.cy = info.K[5];
+  return K;
 }
 
 }  // namespace geofusion

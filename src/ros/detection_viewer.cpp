@@ -10,23 +10,6 @@
 
 namespace geofusion {
 
-namespace {
-
-// Why an image cannot be used, or nullptr.
-const char* depthProblem(const sensor_msgs::Image& depth) {
-  namespace enc = sensor_msgs::image_encodings;
-  if (depth.width == 0 || depth.height == 0 || depth.data.empty()) return "empty depth image";
-  if (depth.encoding != enc::TYPE_32FC1 && depth.encoding != enc::TYPE_16UC1) {
-    return "depth encoding is neither 32FC1 (metres) nor 16UC1 (millimetres)";
-  }
-  if (depth.data.size() < static_cast<std::size_t>(depth.step) * depth.height) {
-    return "depth data shorter than step * height";
-  }
-  return nullptr;
-}
-
-}  // namespace
-
 DetectionViewer::DetectionViewer(ros::NodeHandle nh, ros::NodeHandle pnh)
     : nh_(nh), pnh_(pnh), tf_listener_(tf_buffer_) {
   pnh_.param<std::string>("odom_frame", odom_frame_, "odom");

@@ -3,8 +3,12 @@
 
 #include "geofusion/core/measurement.h"
 
+#include "geofusion/core/camera.h"
+
 #include <geofusion/DetectionArray.h>
 #include <geometry_msgs/Pose.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
 
 #include <vector>
 
@@ -16,5 +20,14 @@ std::vector<RawDetection> fromMsg(const geofusion::DetectionArray& msg);
 
 geofusion::Detection toMsg(const RawDetection& detection);
 geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& T);
+
+/// Why a depth image cannot be used (empty, encoding other than 32FC1 metres / 16UC1
+/// millimetres, data shorter than step * height), or nullptr.
+const char* depthProblem(const sensor_msgs::Image& depth);
+/// Depth in metres, row-major, 0 = no reading (NaN, inf, non-positive and 16-bit 0 become 0).
+/// False when depthProblem() says the image is unusable.
+bool depthToMetres(const sensor_msgs::Image& depth, std::vector<float>* metres);
+/// Pinhole intrinsics from the K matrix (distortion is ignored: registered, rectified depth).
+PinholeIntrinsics intrinsicsFromCameraInfo(const sensor_msgs::CameraInfo& info);
 
 }  // namespace geofusion

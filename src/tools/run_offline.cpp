@@ -1,0 +1,251 @@
+// run_offline: runs the scene estimator over a recording as fast as the machine allows (rosbag
+// C++ API, no ROS master) and writes a results file (docs/results.md).
+//
+//   run_offline --bag FILE.bag --out results.yaml [--method geofusion|fbf|bslam|rfront]
+//       [--model-set primitives|ycb_video|FILE.yaml] [--models DIR] [--keyframe-every N]
+//       [--depth-topic T] [--camera-info-topic T] [--detections-topic T] [--odom-frame odom]
+//       [--quiet]
+#include "command_line.h"
+#include "geofusion/core/frame_by_frame.h"
+#include "geofusion/core/run_results.h"
+#include "geofusion/core/scene_estimator.h"
+#include "geofusion/ros/conversions.h"
+
+#include <geofusion/DetectionArray.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <tf2/buffer_core.h>
+#include <tf2_eigen/tf2_eigen.h>
+#include <tf2_msgs/TFMessage.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <map>
+#include <string>
+
+namespace {
+
+struct Options {
+  std::string bag, out;
+  std::string method = "geofusion";
+  std::string model_set = "primitives";
+  std::string models_dir;
+  int keyframe_every = 1;
+  std::string depth_topic = "/head_camera/depth_registered/image_raw";
+  std::string info_topic = "/head_camera/rgb/camera_info";
+  std::string detections_topic = "/detections";
+  std::string odom_frame = "odom";
+  bool quiet = false;
+};
+
+void usage() {
+  std::cerr << "usage: run_offline --bag FILE.bag --out RESULTS.yaml [--method "
+               "geofusion|fbf|bslam|rfront]\n"
+               "         [--model-set primitives|ycb_video|FILE.yaml] [--models DIR]\n"
+               "         [--keyframe-every N=1] [--depth-topic T] [--camera-info-topic T]\n"
+               "         [--detections-topic T] [--odom-frame odom] [--quiet]\n";
+}
+
+Options parse(int argc, char** argv) {
+  Options o;
+  geofusion::CommandLine args(argc, argv);
+  std::string a;
+  while (args.next(&a)) {
+    if (a == "--bag")
+      o.bag = args.value();
+    else if (a == "--out")
+      o.out = args.value();
+    else if (a == "--method")
+      o.method = args.value();
+    else if (a == "--model-set")
+      o.model_set = args.value();
+    else if (a == "--models")
+      o.models_dir = args.value();
+    else if (a == "--keyframe-every")
+      o.keyframe_every = std::stoi(args.value());
+    else if (a == "--depth-topic")
+      o.depth_topic = args.value();
+    else if (a == "--camera-info-topic")
+      o.info_topic = args.value();
+    else if (a == "--detections-topic")
+      o.detections_topic = args.value();
+    else if (a == "--odom-frame")
+      o.odom_frame = args.value();
+    else if (a == "--quiet")
+      o.quiet = true;
+    else if (a == "-h" || a == "--help") {
+      usage();
+      std::exit(0);
+    } else
+      throw std::runtime_error("unknown option " + a);
+  }
+  if (o.bag.empty() || o.out.empty()) throw std::runtime_error("--bag and --out are required");
+  if (o.keyframe_every < 1) throw std::runtime_error("--keyframe-every must be >= 1");
+  return o;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace geofusion;
+  Options opt;
+  Method method;
+  try {
+    opt = parse(argc, argv);
+    if (!parseMethod(opt.method, &method)) throw std::runtime_error("unknown method " + opt.method);
+  } catch (const std::exception& e) {
+    std::cerr << "run_offline: " << e.what() << "\n";
+    usage();
+    return 2;
+  }
+  ModelSet models;
+  if (opt.model_set == "primitives") {
+    models = ModelSet::builtinPrimitives();
+  } else {
+    const std::string yaml = opt.model_set == "ycb_video" ? std::string(GEOFUSION_SOURCE_DIR) +
+                                                                "/config/models/ycb_video.yaml"
+                                                          : opt.model_set;
+    std::string dir = opt.models_dir;
+    if (dir.empty() && opt.model_set == "ycb_video") {
+      const char* env = std::getenv("GEOFUSION_YCB_DIR");
+      dir = env ? env : std::string(GEOFUSION_SOURCE_DIR) + "/../shared/data/ycb_video";
+    }
+    std::vector<std::string> errors;
+    if (!ModelSet::load(yaml, dir, &models, &errors) || models.size() == 0) {
+      std::cerr << "run_offline: cannot load the model set " << yaml << "\n";
+      for (const auto& e : errors) std::cerr << "  " << e << "\n";
+      return 1;
+    }
+    for (const auto& e : errors) std::cerr << "run_offline: warning: " << e << "\n";
+  }
+
+  rosbag::Bag bag;
+  try {
+    bag.open(opt.bag, rosbag::bagmode::Read);
+  } catch (const std::exception& e) {
+    std::cerr << "run_offline: cannot read " << opt.bag << ": " << e.what() << "\n";
+    return 1;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  // TF of the whole recording first (an offline run may look anywhere in time).
+  rosbag::View all(bag);
+  const double duration = (all.getEndTime() - all.getBeginTime()).toSec();
+  tf2::BufferCore tf(ros::Duration(std::max(10.0, duration + 10.0)));
+  for (const rosbag::MessageInstance& m :
+       rosbag::View(bag, rosbag::TopicQuery(std::vector<std::string>{"/tf", "/tf_static"}))) {
+    const auto msg = m.instantiate<tf2_msgs::TFMessage>();
+    if (!msg) continue;
+    const bool is_static = m.getTopic() == "/tf_static";
+    for (const auto& t : msg->transforms) {
+      try {
+        tf.setTransform(t, "bag", is_static);
+      } catch (const std::exception&) {
+      }
+    }
+  }
+
+  EstimatorConfig config;
+  config.method = method;
+  SceneEstimator estimator(models, config);
+  const FrameByFrame checker;
+  RunResults results;
+  results.method = toString(method);
+  results.source = opt.bag;
+  results.model_set = models.name();
+  results.recording_duration_s = duration;
+
+  // Sets of depth, camera_info and detections with the same header stamp.
+  struct Pending {
+    sensor_msgs::ImageConstPtr depth;
+    sensor_msgs::CameraInfoConstPtr info;
+    geofusion::DetectionArrayConstPtr detections;
+  };
+  std::map<uint64_t, Pending> pending;
+  rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{
+                             opt.depth_topic, opt.info_topic, opt.detections_topic}));
+  const std::size_t total = view.size();
+  std::size_t read = 0;
+  int sets = 0, warned = 0;
+  std::vector<float> depth;
+  for (const rosbag::MessageInstance& m : view) {
+    ++read;
+    uint64_t stamp = 0;
+    if (m.getTopic() == opt.depth_topic) {
+      auto msg = m.instantiate<sensor_msgs::Image>();
+      if (!msg) continue;
+      stamp = msg->header.stamp.toNSec();
+      pending[stamp].depth = msg;
+    } else if (m.getTopic() == opt.info_topic) {
+      auto msg = m.instantiate<sensor_msgs::CameraInfo>();
+      if (!msg) continue;
+      stamp = msg->header.stamp.toNSec();
+      pending[stamp].info = msg;
+    } else {
+      auto msg = m.instantiate<geofusion::DetectionArray>();
+      if (!msg) continue;
+      stamp = msg->header.stamp.toNSec();
+      pending[stamp].detections = msg;
+    }
+    Pending& p = pending[stamp];
+    if (!p.depth || !p.info || !p.detections) continue;
+    const Pending set = p;
+    pending.erase(stamp);
+    // Older incomplete sets will not complete any more.
+    pending.erase(pending.begin(), pending.lower_bound(stamp));
+    ++results.frames_seen;
+    if (sets++ % opt.keyframe_every != 0) continue;
+    Keyframe kf;
+    kf.stamp_s = set.detections->header.stamp.toSec();
+    kf.K = intrinsicsFromCameraInfo(*set.info);
+    try {
+      kf.T_odom_cam = tf2::transformToEigen(tf.lookupTransform(
+          opt.odom_frame, set.detections->header.frame_id, set.detections->header.stamp));
+    } catch (const std::exception& e) {
+      ++results.frames_skipped;
+      if (warned++ < 5) std::cerr << "run_offline: frame skipped, no TF: " << e.what() << "\n";
+      continue;
+    }
+    if (!depthToMetres(*set.depth, &depth) ||
+        depth.size() != static_cast<std::size_t>(kf.K.width) * kf.K.height) {
+      ++results.frames_skipped;
+      if (warned++ < 5) std::cerr << "run_offline: frame skipped: unusable depth image\n";
+      continue;
+    }
+    kf.depth = DepthImageView{depth.data(), kf.K.width, kf.K.height};
+    for (const RawDetection& raw : fromMsg(*set.detections)) {
+      ObjectMeasurement meas;
+      SkipReason why;
+      if (checker.check(raw, &meas, &why)) kf.detections.push_back(meas);
+    }
+    results.keyframes.push_back(estimator.addKeyframe(kf));
+    if (!opt.quiet && results.keyframes.size() % 10 == 0) {
+      const int percent = static_cast<int>(100.0 * read / std::max<std::size_t>(1, total));
+      std::fprintf(stderr, "\r[%-40s] %3d%%  %zu keyframes, %zu objects",
+                   std::string(percent * 40 / 100, '#').c_str(), percent, results.keyframes.size(),
+                   results.keyframes.back().objects.size());
+    }
+  }
+  results.final_map = estimator.finish();
+  results.trajectory = estimator.trajectory();
+  results.trajectory_stamps = estimator.keyframeStamps();
+  results.wall_time_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!opt.quiet) std::fprintf(stderr, "\n");
+  std::string error;
+  if (!writeRunResults(opt.out, results, &error)) {
+    std::cerr << "run_offline: " << error << "\n";
+    return 1;
+  }
+  std::printf(
+      "run_offline: %s on %s: %zu keyframes (%d sets, %d skipped), %zu objects, %zu contacts; "
+      "%.1f s for %.1f s of recording (real-time factor %.2f); results in %s\n",
+      results.method.c_str(), opt.bag.c_str(), results.keyframes.size(), results.frames_seen,
+      results.frames_skipped, results.final_map.objects.size(), results.final_map.contacts.size(),
+      results.wall_time_s, duration, duration > 0 ? results.wall_time_s / duration : 0.0,
+      opt.out.c_str());
+  return results.keyframes.empty() ? 1 : 0;
+}

@@ -1,0 +1,120 @@
+#!/usr/bin/python3
+"""Checks run_offline on a generated demo recording: the four methods run, the results file has
+every keyframe and the documented fields, GeoFusion's final map matches the ground truth
+(objects found at the right place, no false ones, contacts), and bad requests are refused.
+A plain unittest, no ROS master (the workspace's setup.bash must be sourced):
+
+    python3 test/ros/offline_runner_checker.py
+"""
+import math
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import unittest
+
+import yaml
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import geofusion_test_utils as util  # noqa: E402
+
+KEYFRAMES = 30
+LOADER = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
+
+
+def load(path):
+    with open(path) as f:
+        return yaml.load(f, Loader=LOADER)
+
+
+class OfflineRunnerTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.dir = tempfile.mkdtemp(prefix='geofusion_runner_')
+        subprocess.check_call([util.find_tool('generate_dataset'), '--suite', 'demo', '--out-dir',
+                               cls.dir, '--keyframes', str(KEYFRAMES), '--previews', '0'],
+                              stdout=subprocess.DEVNULL)
+        cls.bag = os.path.join(cls.dir, 'demo_01.bag')
+        cls.gt = load(os.path.join(cls.dir, 'demo_01_gt.yaml'))
+        cls.results = {}
+        for method in ('fbf', 'bslam', 'rfront', 'geofusion'):
+            out = os.path.join(cls.dir, method + '.yaml')
+            p = subprocess.run([util.find_tool('run_offline'), '--bag', cls.bag, '--out', out,
+                                '--method', method, '--quiet'], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, universal_newlines=True, timeout=600)
+            cls.results[method] = (p.returncode, p.stdout + p.stderr,
+                                   load(out) if p.returncode == 0 else None)
+
+    @classmethod
+    def tearDownClass(cls):
+        shutil.rmtree(cls.dir, ignore_errors=True)
+
+    def test_every_method_runs_every_keyframe(self):
+        names = {'fbf': 'FbF', 'bslam': 'B-SLAM', 'rfront': 'R-Front', 'geofusion': 'GeoFusion'}
+        stamps = [round(float(f['stamp']), 6) for f in self.gt['frames'] if f['keyframe']]
+        for method, (rc, out, res) in self.results.items():
+            self.assertEqual(rc, 0, out)
+            self.assertEqual(res['format'], 'geofusion_results_v1')
+            self.assertEqual(res['method'], names[method])
+            self.assertEqual(len(res['keyframes']), KEYFRAMES)
+            self.assertEqual([round(float(k['stamp']), 6) for k in res['keyframes']], stamps)
+            self.assertEqual(res['frames_skipped'], 0)
+            self.assertGreater(res['recording_duration_s'], 0)
+            for k in res['keyframes']:
+                self.assertEqual(len(k['map_camera']), 7)
+                for key in ('consistency', 'association', 'stage_one', 'relations', 'stage_two',
+                            'total'):
+                    self.assertGreaterEqual(k['timings_ms'][key], 0.0)
+                for o in k['objects']:
+                    self.assertTrue(0.0 <= o['score'] <= 1.0)
+                    self.assertEqual(len(o['camera_object']), 7)
+
+    def test_geofusion_final_map_matches_the_truth(self):
+        rc, out, res = self.results['geofusion']
+        self.assertEqual(rc, 0, out)
+        truth = [(o['class_name'], o['pose'][:3]) for o in self.gt['objects']]
+        final = res['final_map']['objects']
+        matched, false = set(), 0
+        for o in final:
+            best, best_i = 1e9, -1
+            for i, (name, p) in enumerate(truth):
+                if name != o['class_name'] or i in matched:
+                    continue
+                d = math.dist(p, o['map_object'][:3])
+                if d < best:
+                    best, best_i = d, i
+            if best < 0.02:
+                matched.add(best_i)
+            else:
+                false += 1
+        seen = {t for f in self.gt['frames'] if f['keyframe'] for t in f['detection_truth']
+                if t >= 0}
+        self.assertEqual(false, 0, final)
+        self.assertGreaterEqual(len(matched), len(seen) - 1)
+        # Contacts refer to objects of the final map (or -1, the support plane).
+        ids = {o['id'] for o in final}
+        self.assertTrue(res['final_map']['contacts'])
+        for c in res['final_map']['contacts']:
+            self.assertTrue(c['a'] == -1 or c['a'] in ids)
+            self.assertIn(c['b'], ids)
+        # Fewer objects than B-SLAM, which keeps every stray detection.
+        self.assertLess(len(final), len(self.results['bslam'][2]['final_map']['objects']))
+
+    def test_bad_requests_are_refused(self):
+        tool = util.find_tool('run_offline')
+        p = subprocess.run([tool, '--bag', self.bag, '--out', os.path.join(self.dir, 'x.yaml'),
+                            '--method', 'orbslam'], stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, universal_newlines=True)
+        self.assertEqual(p.returncode, 2)
+        self.assertIn('unknown method', p.stderr)
+        p = subprocess.run([tool, '--bag', '/nonexistent.bag', '--out',
+                            os.path.join(self.dir, 'y.yaml')], stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, universal_newlines=True)
+        self.assertEqual(p.returncode, 1)
+        self.assertIn('cannot read', p.stderr)
+        self.assertFalse(os.path.exists(os.path.join(self.dir, 'y.yaml')))
+
+
+if __name__ == '__main__':
+    unittest.main(verbosity=2)
