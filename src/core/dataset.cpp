@@ -2,6 +2,8 @@
 
 #include "geofusion/core/metrics.h"
 
+#include "yaml_io.h"
+
 #include <yaml-cpp/yaml.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -94,13 +96,6 @@ bool makeSuiteScene(const SuiteSpec& suite, const SceneSpec& spec, const ModelSe
 // Ground-truth YAML.
 namespace {
 
-void emitPose(YAML::Emitter& out, const char* key, const Eigen::Isometry3d& T) {
-  const Eigen::Quaterniond q(T.linear());
-  const Eigen::Vector3d& t = T.translation();
-  out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq << t.x() << t.y() << t.z()
-      << q.x() << q.y() << q.z() << q.w() << YAML::EndSeq;
-}
-
 Eigen::Isometry3d parsePose(const YAML::Node& n, const char* what) {
   if (!n || !n.IsSequence() || n.size() != 7) {
     throw std::runtime_error(std::string(what) + ": expected [x, y, z, qx, qy, qz, qw]");
@@ -184,7 +179,7 @@ bool writeGroundTruth(const std::string& path, const GroundTruth& gt, std::strin
     out << YAML::Key << "index" << YAML::Value << i;
     out << YAML::Key << "class_name" << YAML::Value << o.model->name;
     out << YAML::Key << "class_id" << YAML::Value << o.model->id;
-    emitPose(out, "pose", o.T_world_obj);
+    yaml_io::emitPose(out, "pose", o.T_world_obj);
     out << YAML::EndMap;
   }
   out << YAML::EndSeq;
@@ -211,10 +206,10 @@ bool writeGroundTruth(const std::string& path, const GroundTruth& gt, std::strin
     std::snprintf(stamp, sizeof(stamp), "%.9f", f.stamp_s);
     out << YAML::Key << "stamp" << YAML::Value << stamp;
     out << YAML::Key << "keyframe" << YAML::Value << f.keyframe;
-    emitPose(out, "map_base", f.T_map_base);
-    emitPose(out, "odom_base", f.T_odom_base);
-    emitPose(out, "base_camera_link", f.T_base_link);
-    emitPose(out, "map_camera", f.T_map_optical);
+    yaml_io::emitPose(out, "map_base", f.T_map_base);
+    yaml_io::emitPose(out, "odom_base", f.T_odom_base);
+    yaml_io::emitPose(out, "base_camera_link", f.T_base_link);
+    yaml_io::emitPose(out, "map_camera", f.T_map_optical);
     if (f.keyframe) {
       out << YAML::Key << "visible_fraction" << YAML::Value << YAML::Flow << YAML::BeginSeq;
       for (double v : f.visible_fraction) {
@@ -227,26 +222,11 @@ bool writeGroundTruth(const std::string& path, const GroundTruth& gt, std::strin
     out << YAML::EndMap;
   }
   out << YAML::EndSeq << YAML::EndMap;
-  if (!out.good()) {
-    if (error) *error = "YAML emitter: " + out.GetLastError();
-    return false;
-  }
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream file(tmp);
-    file << "# GeoFusion ground truth (docs/dataset.md). Poses [x, y, z, qx, qy, qz, qw], metres;\n"
-            "# T_a_b maps b coordinates into a; map = world, z up, origin on the floor.\n"
-         << out.c_str() << "\n";
-    if (!file.good()) {
-      if (error) *error = "cannot write " + tmp;
-      return false;
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    if (error) *error = "cannot rename " + tmp + " to " + path;
-    return false;
-  }
-  return true;
+  return yaml_io::writeAtomically(
+      path,
+      "# GeoFusion ground truth (docs/dataset.md). Poses [x, y, z, qx, qy, qz, qw], metres;\n"
+      "# T_a_b maps b coordinates into a; map = world, z up, origin on the floor.\n",
+      out, error);
 }
 
 bool readGroundTruth(const std::string& path, const ModelSet& models, GroundTruth* gt,

@@ -1,5 +1,7 @@
 #include "geofusion/core/run_results.h"
 
+#include "yaml_io.h"
+
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -8,13 +10,6 @@
 
 namespace geofusion {
 namespace {
-
-void emitPose(YAML::Emitter& out, const char* key, const Eigen::Isometry3d& T) {
-  const Eigen::Quaterniond q(T.linear());
-  const Eigen::Vector3d& t = T.translation();
-  out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq << t.x() << t.y() << t.z()
-      << q.x() << q.y() << q.z() << q.w() << YAML::EndSeq;
-}
 
 void emitObjects(YAML::Emitter& out, const std::vector<ObjectEstimate>& objects,
                  const Eigen::Isometry3d& T_map_cam) {
@@ -29,8 +24,8 @@ void emitObjects(YAML::Emitter& out, const std::vector<ObjectEstimate>& objects,
     out << YAML::Key << "false_positive" << YAML::Value << o.false_positive;
     out << YAML::Key << "consistency" << YAML::Value << o.best_consistency;
     out << YAML::Key << "measurements" << YAML::Value << o.measurements;
-    emitPose(out, "map_object", o.T_map_obj);
-    emitPose(out, "camera_object", T_cam_map * o.T_map_obj);
+    yaml_io::emitPose(out, "map_object", o.T_map_obj);
+    yaml_io::emitPose(out, "camera_object", T_cam_map * o.T_map_obj);
     out << YAML::EndMap;
   }
   out << YAML::EndSeq;
@@ -91,7 +86,7 @@ bool writeRunResults(const std::string& path, const RunResults& r, std::string* 
     char stamp[32];
     std::snprintf(stamp, sizeof(stamp), "%.9f", k.stamp_s);
     out << YAML::Key << "stamp" << YAML::Value << stamp;
-    emitPose(out, "map_camera", k.T_map_cam);
+    yaml_io::emitPose(out, "map_camera", k.T_map_cam);
     emitTimings(out, k.timings);
     out << YAML::Key << "removed_ids" << YAML::Value << YAML::Flow << k.removed_ids;
     emitObjects(out, k.objects, k.T_map_cam);
@@ -110,29 +105,13 @@ bool writeRunResults(const std::string& path, const RunResults& r, std::string* 
     std::snprintf(stamp, sizeof(stamp), "%.9f",
                   i < r.trajectory_stamps.size() ? r.trajectory_stamps[i] : 0.0);
     out << YAML::Key << "stamp" << YAML::Value << stamp;
-    emitPose(out, "map_camera", r.trajectory[i]);
+    yaml_io::emitPose(out, "map_camera", r.trajectory[i]);
     out << YAML::EndMap;
   }
   out << YAML::EndSeq << YAML::EndMap;
-  if (!out.good()) {
-    if (error) *error = "YAML emitter: " + out.GetLastError();
-    return false;
-  }
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream file(tmp);
-    file << "# GeoFusion run results (docs/results.md). Poses [x, y, z, qx, qy, qz, qw].\n"
-         << out.c_str() << "\n";
-    if (!file.good()) {
-      if (error) *error = "cannot write " + tmp;
-      return false;
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    if (error) *error = "cannot rename " + tmp + " to " + path;
-    return false;
-  }
-  return true;
+  return yaml_io::writeAtomically(
+      path, "# GeoFusion run results (docs/results.md). Poses [x, y, z, qx, qy, qz, qw].\n", out,
+      error);
 }
 
 }  // namespace geofusion
