@@ -6,10 +6,9 @@
 //       [--depth-topic T] [--camera-info-topic T] [--detections-topic T] [--odom-frame odom]
 //       [--quiet]
 #include "command_line.h"
-#include "geofusion/core/frame_by_frame.h"
 #include "geofusion/core/run_results.h"
 #include "geofusion/core/scene_estimator.h"
-#include "geofusion/ros/conversions.h"
+#include "geofusion/ros/estimator_pipeline.h"
 
 #include <geofusion/DetectionArray.h>
 #include <rosbag/bag.h>
@@ -103,20 +102,18 @@ int main(int argc, char** argv) {
     return 2;
   }
   ModelSet models;
-  if (opt.model_set == "primitives") {
-    models = ModelSet::builtinPrimitives();
-  } else {
-    const std::string yaml = opt.model_set == "ycb_video" ? std::string(GEOFUSION_SOURCE_DIR) +
-                                                                "/config/models/ycb_video.yaml"
-                                                          : opt.model_set;
-    std::string dir = opt.models_dir;
-    if (dir.empty() && opt.model_set == "ycb_video") {
-      const char* env = std::getenv("GEOFUSION_YCB_DIR");
-      dir = env ? env : std::string(GEOFUSION_SOURCE_DIR) + "/../shared/data/ycb_video";
+  {
+    std::string spec = opt.model_set, dir = opt.models_dir;
+    if (spec == "ycb_video") {
+      spec = std::string(GEOFUSION_SOURCE_DIR) + "/config/models/ycb_video.yaml";
+      if (dir.empty()) {
+        const char* env = std::getenv("GEOFUSION_YCB_DIR");
+        dir = env ? env : std::string(GEOFUSION_SOURCE_DIR) + "/../shared/data/ycb_video";
+      }
     }
     std::vector<std::string> errors;
-    if (!ModelSet::load(yaml, dir, &models, &errors) || models.size() == 0) {
-      std::cerr << "run_offline: cannot load the model set " << yaml << "\n";
+    if (!loadModelSet(spec, dir, &models, &errors)) {
+      std::cerr << "run_offline: cannot load the model set " << spec << "\n";
       for (const auto& e : errors) std::cerr << "  " << e << "\n";
       return 1;
     }
@@ -150,8 +147,9 @@ int main(int argc, char** argv) {
 
   EstimatorConfig config;
   config.method = method;
-  SceneEstimator estimator(models, config);
-  const FrameByFrame checker;
+  KeyframeSelectorConfig keyframes;
+  keyframes.every_n_frames = opt.keyframe_every;
+  EstimatorPipeline pipeline(models, config, keyframes);
   RunResults results;
   results.method = toString(method);
   results.source = opt.bag;
@@ -169,8 +167,7 @@ int main(int argc, char** argv) {
                              opt.depth_topic, opt.info_topic, opt.detections_topic}));
   const std::size_t total = view.size();
   std::size_t read = 0;
-  int sets = 0, warned = 0;
-  std::vector<float> depth;
+  int warned = 0;
   for (const rosbag::MessageInstance& m : view) {
     ++read;
     uint64_t stamp = 0;
@@ -197,31 +194,24 @@ int main(int argc, char** argv) {
     // Older incomplete sets will not complete any more.
     pending.erase(pending.begin(), pending.lower_bound(stamp));
     ++results.frames_seen;
-    if (sets++ % opt.keyframe_every != 0) continue;
-    Keyframe kf;
-    kf.stamp_s = set.detections->header.stamp.toSec();
-    kf.K = intrinsicsFromCameraInfo(*set.info);
+    Eigen::Isometry3d T_odom_cam;
     try {
-      kf.T_odom_cam = tf2::transformToEigen(tf.lookupTransform(
+      T_odom_cam = tf2::transformToEigen(tf.lookupTransform(
           opt.odom_frame, set.detections->header.frame_id, set.detections->header.stamp));
     } catch (const std::exception& e) {
       ++results.frames_skipped;
       if (warned++ < 5) std::cerr << "run_offline: frame skipped, no TF: " << e.what() << "\n";
       continue;
     }
-    if (!depthToMetres(*set.depth, &depth) ||
-        depth.size() != static_cast<std::size_t>(kf.K.width) * kf.K.height) {
+    KeyframeResult r;
+    const auto outcome = pipeline.process(*set.depth, *set.info, *set.detections, T_odom_cam, &r);
+    if (outcome == EstimatorPipeline::Outcome::kBadDepth) {
       ++results.frames_skipped;
       if (warned++ < 5) std::cerr << "run_offline: frame skipped: unusable depth image\n";
       continue;
     }
-    kf.depth = DepthImageView{depth.data(), kf.K.width, kf.K.height};
-    for (const RawDetection& raw : fromMsg(*set.detections)) {
-      ObjectMeasurement meas;
-      SkipReason why;
-      if (checker.check(raw, &meas, &why)) kf.detections.push_back(meas);
-    }
-    results.keyframes.push_back(estimator.addKeyframe(kf));
+    if (outcome != EstimatorPipeline::Outcome::kKeyframe) continue;
+    results.keyframes.push_back(r);
     if (!opt.quiet && results.keyframes.size() % 10 == 0) {
       const int percent = static_cast<int>(100.0 * read / std::max<std::size_t>(1, total));
       std::fprintf(stderr, "\r[%-40s] %3d%%  %zu keyframes, %zu objects",
@@ -229,9 +219,9 @@ int main(int argc, char** argv) {
                    results.keyframes.back().objects.size());
     }
   }
-  results.final_map = estimator.finish();
-  results.trajectory = estimator.trajectory();
-  results.trajectory_stamps = estimator.keyframeStamps();
+  results.final_map = pipeline.estimator().finish();
+  results.trajectory = pipeline.estimator().trajectory();
+  results.trajectory_stamps = pipeline.estimator().keyframeStamps();
   results.wall_time_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!opt.quiet) std::fprintf(stderr, "\n");

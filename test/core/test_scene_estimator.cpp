@@ -2,6 +2,7 @@
 // methods from one code path, object count, false-positive removal and pose error.
 #include "geofusion/core/dataset.h"
 #include "geofusion/core/evaluation.h"
+#include "geofusion/core/keyframe_selector.h"
 #include "geofusion/core/metrics.h"
 #include "geofusion/core/renderer.h"
 #include "geofusion/core/scene_estimator.h"
@@ -85,6 +86,35 @@ Score run(Method method, std::vector<KeyframeResult>* results = nullptr,
   }
   const KeyframeResult final = estimator.finish();
   return scoreMap(s.scene, final.objects);
+}
+
+TEST(KeyframeSelector, EveryNthFrameOrByMotion) {
+  auto moved = [](double x, double yaw) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation().x() = x;
+    T.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    return T;
+  };
+  KeyframeSelectorConfig every3;
+  every3.every_n_frames = 3;
+  KeyframeSelector s(every3);
+  std::vector<int> picked;
+  for (int k = 0; k < 10; ++k)
+    if (s.select(moved(0.0, 0.0))) picked.push_back(k);
+  EXPECT_EQ(picked, (std::vector<int>{0, 3, 6, 9}));
+  // By motion only: 5 cm or 0.1 rad since the last keyframe.
+  KeyframeSelectorConfig motion;
+  motion.min_translation_m = 0.05;
+  motion.min_rotation_rad = 0.1;
+  KeyframeSelector m(motion);
+  EXPECT_TRUE(m.select(moved(0.0, 0.0)));    // the first frame
+  EXPECT_FALSE(m.select(moved(0.0, 0.0)));   // standing still: never
+  EXPECT_FALSE(m.select(moved(0.03, 0.0)));  // 3 cm
+  EXPECT_TRUE(m.select(moved(0.06, 0.0)));   // 6 cm since the last keyframe
+  EXPECT_FALSE(m.select(moved(0.08, 0.05)));
+  EXPECT_TRUE(m.select(moved(0.08, 0.12)));  // turned 0.12 rad
+  m.reset();
+  EXPECT_TRUE(m.select(moved(0.08, 0.12)));  // after a reset the next frame is the first
 }
 
 TEST(SceneEstimator, MethodNames) {

@@ -1,0 +1,52 @@
+// The path from a synchronised depth image, camera_info and DetectionArray (with the odometry
+// camera pose from TF) to the scene estimator: keyframe selection, depth conversion, detection
+// checks. One code path for the estimator nodelet and the offline runner; only their I/O
+// differs.
+#pragma once
+
+#include "geofusion/core/frame_by_frame.h"
+#include "geofusion/core/keyframe_selector.h"
+#include "geofusion/core/scene_estimator.h"
+
+#include <geofusion/DetectionArray.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace geofusion {
+
+/// Loads a model set: "primitives" (built in) or the path of a model-set YAML with meshes from
+/// `models_dir` (empty: the YAML's folder). False with the reasons in `errors` when nothing
+/// loads; classes that fail alone are reported in `errors` and left out.
+bool loadModelSet(const std::string& spec, const std::string& models_dir, ModelSet* models,
+                  std::vector<std::string>* errors);
+
+class EstimatorPipeline {
+ public:
+  enum class Outcome { kKeyframe, kNotKeyframe, kBadDepth };
+
+  EstimatorPipeline(const ModelSet& models, const EstimatorConfig& estimator,
+                    const KeyframeSelectorConfig& keyframes,
+                    const FrameByFrame::Config& checks = FrameByFrame::Config());
+
+  /// One synchronised frame with its odometry camera pose. A keyframe fills `result`.
+  Outcome process(const sensor_msgs::Image& depth, const sensor_msgs::CameraInfo& info,
+                  const geofusion::DetectionArray& detections, const Eigen::Isometry3d& T_odom_cam,
+                  KeyframeResult* result);
+
+  SceneEstimator& estimator() { return *estimator_; }
+  const DetectionTally& tally() const { return tally_; }  ///< detections used and skipped
+  void reset();
+
+ private:
+  std::unique_ptr<SceneEstimator> estimator_;
+  KeyframeSelector selector_;
+  FrameByFrame checker_;
+  DetectionTally tally_;
+  std::vector<float> depth_;
+};
+
+}  // namespace geofusion

@@ -1,0 +1,57 @@
+#include "geofusion/ros/estimator_pipeline.h"
+
+#include "geofusion/ros/conversions.h"
+
+namespace geofusion {
+
+bool loadModelSet(const std::string& spec, const std::string& models_dir, ModelSet* models,
+                  std::vector<std::string>* errors) {
+  if (spec == "primitives" || spec.empty()) {
+    *models = ModelSet::builtinPrimitives();
+    return true;
+  }
+  if (!ModelSet::load(spec, models_dir, models, errors)) return false;
+  if (models->size() == 0) {
+    errors->push_back("model set '" + spec + "' has no loadable class");
+    return false;
+  }
+  return true;
+}
+
+EstimatorPipeline::EstimatorPipeline(const ModelSet& models, const EstimatorConfig& estimator,
+                                     const KeyframeSelectorConfig& keyframes,
+                                     const FrameByFrame::Config& checks)
+    : estimator_(std::make_unique<SceneEstimator>(models, estimator)),
+      selector_(keyframes),
+      checker_(checks) {}
+
+void EstimatorPipeline::reset() {
+  estimator_->reset();
+  selector_.reset();
+  tally_ = DetectionTally();
+}
+
+EstimatorPipeline::Outcome EstimatorPipeline::process(const sensor_msgs::Image& depth,
+                                                      const sensor_msgs::CameraInfo& info,
+                                                      const geofusion::DetectionArray& detections,
+                                                      const Eigen::Isometry3d& T_odom_cam,
+                                                      KeyframeResult* result) {
+  const PinholeIntrinsics K = intrinsicsFromCameraInfo(info);
+  if (!K.valid() || !depthToMetres(depth, &depth_) ||
+      depth_.size() != static_cast<std::size_t>(K.width) * K.height) {
+    return Outcome::kBadDepth;
+  }
+  if (!selector_.select(T_odom_cam)) return Outcome::kNotKeyframe;
+  Keyframe kf;
+  kf.stamp_s = detections.header.stamp.toSec();
+  kf.K = K;
+  kf.T_odom_cam = T_odom_cam;
+  kf.depth = DepthImageView{depth_.data(), K.width, K.height};
+  for (const WorldDetection& d : checker_.process(fromMsg(detections), T_odom_cam, &tally_)) {
+    kf.detections.push_back(d.measurement);
+  }
+  *result = estimator_->addKeyframe(kf);
+  return Outcome::kKeyframe;
+}
+
+}  // namespace geofusion
