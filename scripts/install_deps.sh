@@ -12,7 +12,7 @@ PACKAGES=(
   libtf2-eigen-dev python3-tf2-ros
   ros-sensor-msgs python3-sensor-msgs ros-nav-msgs libnav-msgs-dev python3-nav-msgs
   ros-visualization-msgs libvisualization-msgs-dev python3-visualization-msgs
-  ros-std-srvs python3-std-srvs libcv-bridge-dev libimage-transport-dev
+  ros-std-srvs libstd-srvs-dev python3-std-srvs libcv-bridge-dev libimage-transport-dev
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
   librosbag-dev python3-rosbag librostest-dev python3-rostest libdiagnostic-updater-dev rviz
   # the core's libraries

@@ -1,5 +1,6 @@
 // Nodelet entry points: each only constructs the node class from the nodelet's handles.
 #include "geofusion/ros/detection_viewer.h"
+#include "geofusion/ros/scene_estimator_node.h"
 
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
@@ -16,6 +17,15 @@ class DetectionViewerNodelet : public nodelet::Nodelet {
   std::unique_ptr<DetectionViewer> viewer_;
 };
 
+class SceneEstimatorNodelet : public nodelet::Nodelet {
+ private:
+  void onInit() override {
+    node_ = std::make_unique<SceneEstimatorNode>(getNodeHandle(), getPrivateNodeHandle());
+  }
+  std::unique_ptr<SceneEstimatorNode> node_;
+};
+
 }  // namespace geofusion
 
 PLUGINLIB_EXPORT_CLASS(geofusion::DetectionViewerNodelet, nodelet::Nodelet)
+PLUGINLIB_EXPORT_CLASS(geofusion::SceneEstimatorNodelet, nodelet::Nodelet)

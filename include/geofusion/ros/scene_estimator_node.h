@@ -1,0 +1,60 @@
+// The scene estimator on a robot: synchronised RGB-D + detections in (odometry from TF), the
+// object map, rviz markers, the trajectory and the map -> odom correction out; services to save
+// and reset the map. Run as a nodelet (geofusion/SceneEstimatorNodelet) or as a node
+// (scene_estimator_node). Everything but the I/O is EstimatorPipeline, shared with run_offline.
+#pragma once
+
+#include "geofusion/ros/estimator_pipeline.h"
+#include "geofusion/ros/rgbd_detection_subscriber.h"
+
+#include <geofusion/SaveMap.h>
+#include <ros/ros.h>
+#include <std_srvs/Trigger.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_broadcaster.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <memory>
+#include <mutex>
+#include <string>
+
+namespace geofusion {
+
+class SceneEstimatorNode {
+ public:
+  SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh);
+  ~SceneEstimatorNode();
+
+ private:
+  void onFrame(const sensor_msgs::ImageConstPtr& rgb, const sensor_msgs::ImageConstPtr& depth,
+               const sensor_msgs::CameraInfoConstPtr& info,
+               const geofusion::DetectionArrayConstPtr& dets);
+  void onTimeJump(const ros::Time& from, const ros::Time& to);
+  void publish(const KeyframeResult& result, const std_msgs::Header& header);
+  void broadcastCorrection(const ros::Time& stamp);
+  bool onSave(geofusion::SaveMap::Request& req, geofusion::SaveMap::Response& res);
+  bool onReset(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
+  bool save(const std::string& prefix, std::string* message, std::vector<std::string>* files);
+
+  ros::NodeHandle nh_, pnh_;
+  std::string map_frame_, odom_frame_;
+  double tf_timeout_s_ = 0.1;
+  double warn_period_s_ = 5.0;
+  bool publish_tf_ = true;
+  std::string save_on_shutdown_;
+  std::string method_name_;
+
+  std::mutex mutex_;  // guards the pipeline and the last result
+  std::unique_ptr<EstimatorPipeline> pipeline_;
+  KeyframeResult last_;
+  std::size_t keyframes_ = 0, tf_failures_ = 0, bad_depth_ = 0;
+
+  tf2_ros::Buffer tf_buffer_;
+  tf2_ros::TransformListener tf_listener_;
+  tf2_ros::TransformBroadcaster tf_broadcaster_;
+  ros::Publisher map_pub_, markers_pub_, path_pub_;
+  ros::ServiceServer save_srv_, reset_srv_;
+  std::unique_ptr<RgbdDetectionSubscriber> subscriber_;
+};
+
+}  // namespace geofusion

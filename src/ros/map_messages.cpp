@@ -1,0 +1,206 @@
+#include "geofusion/ros/map_messages.h"
+
+#include "geofusion/core/class_palette.h"
+#include "geofusion/ros/conversions.h"
+
+#include <cstdio>
+
+namespace geofusion {
+namespace {
+
+Eigen::Vector3d featureCentre(const ObjectModel& model, const FeatureRef& f,
+                              const Eigen::Isometry3d& T) {
+  if (f.plane && f.index >= 0 && f.index < static_cast<int>(model.features.planes.size()))
+    return T * model.features.planes[static_cast<std::size_t>(f.index)].center;
+  if (!f.plane && f.index >= 0 && f.index < static_cast<int>(model.features.curves.size()))
+    return T * model.features.curves[static_cast<std::size_t>(f.index)].center;
+  return T.translation();
+}
+
+geometry_msgs::Point point(const Eigen::Vector3d& p) {
+  geometry_msgs::Point out;
+  out.x = p.x(), out.y = p.y(), out.z = p.z();
+  return out;
+}
+
+// Contact endpoints in the map frame; index -1 is the support plane.
+bool contactPoints(const KeyframeResult& r, const FeatureContact& c, const ObjectModel* plane_model,
+                   const Eigen::Isometry3d& T_plane, Eigen::Vector3d* a, Eigen::Vector3d* b) {
+  auto at = [&](int index, const FeatureRef& f, Eigen::Vector3d* out) {
+    if (index < 0) {
+      if (!plane_model) return false;
+      *out = featureCentre(*plane_model, f, T_plane);
+      return true;
+    }
+    if (index >= static_cast<int>(r.objects.size())) return false;
+    const ObjectEstimate& o = r.objects[static_cast<std::size_t>(index)];
+    if (!o.model) return false;
+    *out = featureCentre(*o.model, f, o.T_map_obj);
+    return true;
+  };
+  return at(c.object_a, c.feature_a, a) && at(c.object_b, c.feature_b, b);
+}
+
+}  // namespace
+
+geofusion::ObjectMap toObjectMapMsg(const KeyframeResult& r, const SupportPlane& plane,
+                                    const Eigen::Vector3d& gravity,
+                                    const std_msgs::Header& header) {
+  geofusion::ObjectMap msg;
+  msg.header = header;
+  for (const ObjectEstimate& o : r.objects) {
+    if (!o.model) continue;
+    geofusion::MapObject m;
+    m.id = messageId(o.id);
+    m.class_name = o.model->name;
+    m.class_id = o.model->id;
+    m.pose.pose = toPoseMsg(o.T_map_obj);
+    m.existence_score = static_cast<float>(o.existence);
+    m.false_positive_score = static_cast<float>(o.false_positive);
+    m.num_measurements = static_cast<uint32_t>(o.measurements);
+    switch (o.model->symmetry.type) {
+      case Symmetry::Type::kContinuous:
+        m.symmetry = geofusion::MapObject::SYMMETRY_CONTINUOUS;
+        m.symmetry_axis.x = o.model->symmetry.axis.x();
+        m.symmetry_axis.y = o.model->symmetry.axis.y();
+        m.symmetry_axis.z = o.model->symmetry.axis.z();
+        break;
+      case Symmetry::Type::kDiscrete:
+        m.symmetry = geofusion::MapObject::SYMMETRY_DISCRETE;
+        for (const auto& q : o.model->symmetry.rotations) {
+          geometry_msgs::Quaternion mq;
+          mq.x = q.x(), mq.y = q.y(), mq.z = q.z(), mq.w = q.w();
+          m.symmetry_rotations.push_back(mq);
+        }
+        break;
+      default: m.symmetry = geofusion::MapObject::SYMMETRY_NONE;
+    }
+    m.bbox_size.x = o.model->extents.x();
+    m.bbox_size.y = o.model->extents.y();
+    m.bbox_size.z = o.model->extents.z();
+    msg.objects.push_back(m);
+  }
+  Eigen::Isometry3d T_plane = Eigen::Isometry3d::Identity();
+  const auto plane_model = plane.valid ? supportPlaneModel(plane, &T_plane) : nullptr;
+  for (const FeatureContact& c : r.contacts) {
+    Eigen::Vector3d a, b;
+    if (!contactPoints(r, c, plane_model.get(), T_plane, &a, &b)) continue;
+    geofusion::ContactRelation cr;
+    cr.type = c.type == ContactType::kPlanePlane   ? geofusion::ContactRelation::PLANE_PLANE
+              : c.type == ContactType::kPlaneCurve ? geofusion::ContactRelation::PLANE_CURVE
+                                                   : geofusion::ContactRelation::CURVE_CURVE;
+    auto id = [&](int index) {
+      return index < 0 ? geofusion::ContactRelation::SUPPORT_PLANE_ID
+                       : messageId(r.objects[static_cast<std::size_t>(index)].id);
+    };
+    cr.object_a = id(c.object_a);
+    cr.object_b = id(c.object_b);
+    cr.feature_a = static_cast<uint32_t>(std::max(0, c.feature_a.index));
+    cr.feature_b = static_cast<uint32_t>(std::max(0, c.feature_b.index));
+    cr.feature_a_type = c.feature_a.plane ? geofusion::ContactRelation::FEATURE_PLANE
+                                          : geofusion::ContactRelation::FEATURE_CURVE;
+    cr.feature_b_type = c.feature_b.plane ? geofusion::ContactRelation::FEATURE_PLANE
+                                          : geofusion::ContactRelation::FEATURE_CURVE;
+    cr.a_supports_b = c.support;
+    cr.point_a = point(a);
+    cr.point_b = point(b);
+    cr.distance_residual_m = static_cast<float>(c.distance_residual);
+    cr.direction_residual = static_cast<float>(c.direction_residual);
+    msg.contacts.push_back(cr);
+  }
+  msg.gravity.x = gravity.x(), msg.gravity.y = gravity.y(), msg.gravity.z = gravity.z();
+  msg.has_support_plane = plane.valid;
+  if (plane.valid) {
+    msg.support_plane = {plane.normal.x(), plane.normal.y(), plane.normal.z(), -plane.height};
+  }
+  return msg;
+}
+
+visualization_msgs::MarkerArray mapMarkers(const KeyframeResult& r, const SupportPlane& plane,
+                                           const std_msgs::Header& header) {
+  using visualization_msgs::Marker;
+  visualization_msgs::MarkerArray out;
+  Marker clear;
+  clear.header = header;
+  clear.action = Marker::DELETEALL;
+  out.markers.push_back(clear);
+  for (const ObjectEstimate& o : r.objects) {
+    if (!o.model) continue;
+    const Rgb colour = classColor(o.model->name);
+    Marker m;
+    m.header = header;
+    m.ns = kObjectNs;
+    m.id = static_cast<int>(messageId(o.id));
+    m.action = Marker::ADD;
+    m.pose = toPoseMsg(o.T_map_obj);
+    m.color.r = colour.r, m.color.g = colour.g, m.color.b = colour.b;
+    m.color.a = static_cast<float>(0.4 + 0.5 * o.existence);
+    if (!o.model->mesh_path.empty()) {
+      m.type = Marker::MESH_RESOURCE;
+      m.mesh_resource = "file://" + o.model->mesh_path;
+      m.mesh_use_embedded_materials = true;
+      m.scale.x = m.scale.y = m.scale.z = 1.0;
+    } else {
+      // Built-in primitives are centred boxes and cylinders (along z).
+      m.type =
+          o.model->symmetry.type == Symmetry::Type::kContinuous ? Marker::CYLINDER : Marker::CUBE;
+      m.scale.x = o.model->extents.x();
+      m.scale.y = o.model->extents.y();
+      m.scale.z = o.model->extents.z();
+    }
+    out.markers.push_back(m);
+    Marker label = m;
+    label.ns = kObjectLabelNs;
+    label.type = Marker::TEXT_VIEW_FACING;
+    label.mesh_resource.clear();
+    label.pose.orientation = geometry_msgs::Quaternion();
+    label.pose.orientation.w = 1.0;
+    label.pose.position.z += 0.5 * o.model->extents.maxCoeff() + 0.03;
+    label.scale.x = label.scale.y = 0.0;
+    label.scale.z = 0.025;
+    label.color.r = label.color.g = label.color.b = label.color.a = 1.0f;
+    char text[128];
+    std::snprintf(text, sizeof(text), "%d %s %.2f", m.id, o.model->name.c_str(), o.existence);
+    label.text = text;
+    out.markers.push_back(label);
+  }
+  Eigen::Isometry3d T_plane = Eigen::Isometry3d::Identity();
+  const auto plane_model = plane.valid ? supportPlaneModel(plane, &T_plane) : nullptr;
+  int contact_id = 0;
+  for (const FeatureContact& c : r.contacts) {
+    Eigen::Vector3d a, b;
+    if (!contactPoints(r, c, plane_model.get(), T_plane, &a, &b)) continue;
+    Marker arrow;
+    arrow.header = header;
+    arrow.ns = kContactNs;
+    arrow.id = contact_id++;
+    arrow.type = Marker::ARROW;
+    arrow.action = Marker::ADD;
+    arrow.pose.orientation.w = 1.0;
+    arrow.points = {point(a), point(b)};  // from the supporter to the supported feature
+    arrow.scale.x = 0.004, arrow.scale.y = 0.01, arrow.scale.z = 0.01;
+    // P2P red, P2C green, C2C blue.
+    arrow.color.r = c.type == ContactType::kPlanePlane ? 1.0f : 0.1f;
+    arrow.color.g = c.type == ContactType::kPlaneCurve ? 1.0f : 0.1f;
+    arrow.color.b = c.type == ContactType::kCurveCurve ? 1.0f : 0.1f;
+    arrow.color.a = 1.0f;
+    out.markers.push_back(arrow);
+  }
+  if (plane_model) {
+    Marker table;
+    table.header = header;
+    table.ns = kSupportPlaneNs;
+    table.id = 0;
+    table.type = Marker::CUBE;
+    table.action = Marker::ADD;
+    table.pose = toPoseMsg(T_plane);
+    table.scale.x = plane_model->extents.x();
+    table.scale.y = plane_model->extents.y();
+    table.scale.z = plane_model->extents.z();
+    table.color.r = 0.55f, table.color.g = 0.4f, table.color.b = 0.25f, table.color.a = 0.35f;
+    out.markers.push_back(table);
+  }
+  return out;
+}
+
+}  // namespace geofusion

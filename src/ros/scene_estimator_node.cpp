@@ -1,0 +1,233 @@
+#include "geofusion/ros/scene_estimator_node.h"
+
+#include "geofusion/core/run_results.h"
+#include "geofusion/ros/conversions.h"
+#include "geofusion/ros/map_messages.h"
+#include "geofusion/ros/params.h"
+#include "geofusion/ros/tf_lookup.h"
+
+#include <geofusion/ObjectMap.h>
+#include <nav_msgs/Path.h>
+#include <tf2_eigen/tf2_eigen.h>
+#include <visualization_msgs/MarkerArray.h>
+
+namespace geofusion {
+
+SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
+    : nh_(nh), pnh_(pnh), tf_listener_(tf_buffer_) {
+  pnh_.param<std::string>("map_frame", map_frame_, "map");
+  pnh_.param<std::string>("odom_frame", odom_frame_, "odom");
+  pnh_.param("publish_map_to_odom", publish_tf_, true);
+  pnh_.param<std::string>("save_on_shutdown", save_on_shutdown_, "");
+  tf_timeout_s_ = paramAtLeast(pnh_, "tf_timeout_s", 0.1, 0.0);
+  warn_period_s_ = paramAtLeast(pnh_, "warn_period_s", 5.0, 0.1);
+
+  EstimatorConfig config;
+  pnh_.param<std::string>("method", method_name_, "geofusion");
+  if (!parseMethod(method_name_, &config.method)) {
+    ROS_ERROR_STREAM("geofusion: unknown ~method '" << method_name_
+                                                    << "' (fbf, bslam, rfront, geofusion); using "
+                                                       "geofusion");
+    config.method = Method::kGeoFusion;
+  }
+  method_name_ = toString(config.method);
+  config.min_detection_score = paramAtLeast(pnh_, "min_score", 0.0, 0.0);
+  config.stage_one.every_n_keyframes = paramAtLeast(pnh_, "stage_one_every_n_keyframes", 10, 1);
+  KeyframeSelectorConfig keyframes;
+  keyframes.every_n_frames = paramAtLeast(pnh_, "keyframe_every_n_frames", 1, 1);
+  keyframes.min_translation_m = paramAtLeast(pnh_, "keyframe_translation_m", 0.0, 0.0);
+  keyframes.min_rotation_rad = paramAtLeast(pnh_, "keyframe_rotation_rad", 0.0, 0.0);
+
+  std::string model_set, models_dir;
+  pnh_.param<std::string>("model_set", model_set, "primitives");
+  pnh_.param<std::string>("models_dir", models_dir, "");
+  ModelSet models;
+  std::vector<std::string> errors;
+  if (!loadModelSet(model_set, models_dir, &models, &errors)) {
+    for (const auto& e : errors) ROS_ERROR_STREAM("geofusion: " << e);
+    ROS_ERROR_STREAM("geofusion: cannot load the model set '"
+                     << model_set << "'; using the built-in primitives");
+    models = ModelSet::builtinPrimitives();
+  } else {
+    for (const auto& e : errors) ROS_WARN_STREAM("geofusion: " << e);
+  }
+  pipeline_ = std::make_unique<EstimatorPipeline>(models, config, keyframes);
+
+  map_pub_ = pnh_.advertise<geofusion::ObjectMap>("object_map", 1, true);
+  markers_pub_ = pnh_.advertise<visualization_msgs::MarkerArray>("map_markers", 1, true);
+  path_pub_ = pnh_.advertise<nav_msgs::Path>("trajectory", 1, true);
+  save_srv_ = pnh_.advertiseService("save_map", &SceneEstimatorNode::onSave, this);
+  reset_srv_ = pnh_.advertiseService("reset", &SceneEstimatorNode::onReset, this);
+
+  RgbdDetectionSubscriber::Config sub;
+  pnh_.param("rgb_topic", sub.rgb_topic, sub.rgb_topic);
+  pnh_.param("depth_topic", sub.depth_topic, sub.depth_topic);
+  pnh_.param("camera_info_topic", sub.camera_info_topic, sub.camera_info_topic);
+  pnh_.param("detections_topic", sub.detections_topic, sub.detections_topic);
+  sub.queue_size = paramAtLeast(pnh_, "queue_size", 10, 1);
+  sub.max_interval_s = paramAtLeast(pnh_, "sync_max_interval_s", 0.05, 0.0);
+  sub.warn_period_s = warn_period_s_;
+  subscriber_ = std::make_unique<RgbdDetectionSubscriber>(
+      nh_, sub,
+      [this](const auto& rgb, const auto& depth, const auto& info, const auto& dets) {
+        onFrame(rgb, depth, info, dets);
+      },
+      [this](const ros::Time& from, const ros::Time& to) { onTimeJump(from, to); });
+  ROS_INFO_STREAM("geofusion: scene estimator (" << method_name_ << ", " << models.size()
+                                                 << " classes from " << models.name()
+                                                 << ") in frame " << map_frame_);
+}
+
+SceneEstimatorNode::~SceneEstimatorNode() {
+  subscriber_.reset();
+  if (!save_on_shutdown_.empty()) {
+    std::string message;
+    std::vector<std::string> files;
+    save(save_on_shutdown_, &message, &files);
+    ROS_INFO_STREAM("geofusion: " << message);
+  }
+}
+
+void SceneEstimatorNode::onFrame(const sensor_msgs::ImageConstPtr& /*rgb*/,
+                                 const sensor_msgs::ImageConstPtr& depth,
+                                 const sensor_msgs::CameraInfoConstPtr& info,
+                                 const geofusion::DetectionArrayConstPtr& dets) {
+  Eigen::Isometry3d T_odom_cam;
+  std::string error;
+  if (!lookupTransformWallTimeout(tf_buffer_, odom_frame_, dets->header.frame_id,
+                                  dets->header.stamp, tf_timeout_s_, &T_odom_cam, &error)) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++tf_failures_;
+    ROS_WARN_STREAM_THROTTLE(warn_period_s_, "geofusion: frame skipped, no TF from "
+                                                 << odom_frame_ << " to " << dets->header.frame_id
+                                                 << ": " << error << " (" << tf_failures_
+                                                 << " so far)");
+    return;
+  }
+  KeyframeResult result;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto outcome = pipeline_->process(*depth, *info, *dets, T_odom_cam, &result);
+    if (outcome == EstimatorPipeline::Outcome::kBadDepth) {
+      ++bad_depth_;
+      ROS_WARN_STREAM_THROTTLE(warn_period_s_,
+                               "geofusion: frame skipped: "
+                                   << (depthProblem(*depth) ? depthProblem(*depth)
+                                                            : "camera_info or depth size mismatch")
+                                   << " (" << bad_depth_ << " so far)");
+      return;
+    }
+    if (outcome != EstimatorPipeline::Outcome::kKeyframe) return;
+    ++keyframes_;
+    last_ = result;
+  }
+  std_msgs::Header header;
+  header.stamp = dets->header.stamp;
+  header.frame_id = map_frame_;
+  publish(result, header);
+  ROS_DEBUG_STREAM("geofusion: keyframe " << result.keyframe << ": " << result.objects.size()
+                                          << " objects, " << result.timings.total_ms << " ms");
+}
+
+void SceneEstimatorNode::publish(const KeyframeResult& result, const std_msgs::Header& header) {
+  SupportPlane plane;
+  Eigen::Vector3d gravity;
+  std::vector<Eigen::Isometry3d> trajectory;
+  std::vector<double> stamps;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    plane = pipeline_->estimator().supportPlane();
+    gravity = pipeline_->estimator().config().gravity;
+    trajectory = pipeline_->estimator().trajectory();
+    stamps = pipeline_->estimator().keyframeStamps();
+  }
+  map_pub_.publish(toObjectMapMsg(result, plane, gravity, header));
+  markers_pub_.publish(mapMarkers(result, plane, header));
+  nav_msgs::Path path;
+  path.header = header;
+  for (std::size_t i = 0; i < trajectory.size(); ++i) {
+    geometry_msgs::PoseStamped p;
+    p.header.frame_id = map_frame_;
+    p.header.stamp = ros::Time(stamps[i]);
+    p.pose = toPoseMsg(trajectory[i]);
+    path.poses.push_back(p);
+  }
+  path_pub_.publish(path);
+  broadcastCorrection(header.stamp);
+}
+
+void SceneEstimatorNode::broadcastCorrection(const ros::Time& stamp) {
+  if (!publish_tf_) return;
+  Eigen::Isometry3d T_map_odom;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    T_map_odom = pipeline_->estimator().T_map_odom();
+  }
+  geometry_msgs::TransformStamped t = tf2::eigenToTransform(T_map_odom);
+  t.header.stamp = stamp;
+  t.header.frame_id = map_frame_;
+  t.child_frame_id = odom_frame_;
+  tf_broadcaster_.sendTransform(t);
+}
+
+void SceneEstimatorNode::onTimeJump(const ros::Time& from, const ros::Time& to) {
+  ROS_WARN_STREAM("geofusion: time jumped back from " << from << " to " << to
+                                                      << " (a looping bag or restarted driver): "
+                                                         "the map is reset");
+  std::lock_guard<std::mutex> lock(mutex_);
+  pipeline_->reset();
+  tf_buffer_.clear();
+  last_ = KeyframeResult();
+}
+
+bool SceneEstimatorNode::save(const std::string& prefix, std::string* message,
+                              std::vector<std::string>* files) {
+  RunResults results;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    results.method = method_name_;
+    results.source = "scene_estimator_node";
+    results.final_map = pipeline_->estimator().numKeyframes() > 0 ? pipeline_->estimator().finish()
+                                                                  : KeyframeResult();
+    results.trajectory = pipeline_->estimator().trajectory();
+    results.trajectory_stamps = pipeline_->estimator().keyframeStamps();
+  }
+  const std::string path = prefix + ".yaml";
+  std::string error;
+  if (!writeRunResults(path, results, &error)) {
+    *message = "map not saved: " + error;
+    return false;
+  }
+  files->push_back(path);
+  *message = "map saved to " + path + " (" + std::to_string(results.final_map.objects.size()) +
+             " objects, " + std::to_string(results.final_map.contacts.size()) + " contacts)";
+  return true;
+}
+
+bool SceneEstimatorNode::onSave(geofusion::SaveMap::Request& req,
+                                geofusion::SaveMap::Response& res) {
+  if (req.path.empty()) {
+    res.success = false;
+    res.message = "empty path";
+    return true;
+  }
+  res.success = save(req.path, &res.message, &res.files);
+  return true;
+}
+
+bool SceneEstimatorNode::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    pipeline_->reset();
+    last_ = KeyframeResult();
+  }
+  res.success = true;
+  res.message = "map reset";
+  std_msgs::Header header;
+  header.stamp = ros::Time::now();
+  header.frame_id = map_frame_;
+  publish(KeyframeResult(), header);
+  return true;
+}
+
+}  // namespace geofusion

@@ -1,0 +1,119 @@
+#!/usr/bin/python3
+"""Replays a generated demo recording through the scene estimator nodelet and checks the object
+map, the markers, map -> odom on TF and the save and reset services against the ground truth."""
+import math
+import os
+import shutil
+import subprocess
+import tempfile
+import threading
+import time
+import unittest
+
+import rospy
+import rostest
+import tf2_ros
+import yaml
+from geofusion.msg import ObjectMap
+from geofusion.srv import SaveMap
+from std_srvs.srv import Trigger
+from visualization_msgs.msg import Marker, MarkerArray
+
+import geofusion_test_utils as util
+
+NS = '/scene_estimator'
+KEYFRAMES = 24
+
+
+class EstimatorReplayTest(unittest.TestCase):
+    def setUp(self):
+        self.lock = threading.Lock()
+        self.maps, self.markers = [], []
+        rospy.Subscriber(NS + '/object_map', ObjectMap, self.on_map, queue_size=100)
+        rospy.Subscriber(NS + '/map_markers', MarkerArray, self.on_markers, queue_size=100)
+        self.dir = tempfile.mkdtemp(prefix='geofusion_estimator_')
+        self.tf_buffer = tf2_ros.Buffer()
+        self.tf_listener = tf2_ros.TransformListener(self.tf_buffer)
+
+    def tearDown(self):
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+    def on_map(self, msg):
+        with self.lock:
+            self.maps.append(msg)
+
+    def on_markers(self, msg):
+        with self.lock:
+            self.markers.append(msg)
+
+    def test_replay(self):
+        subprocess.check_call([util.find_tool('generate_dataset'), '--suite', 'demo', '--out-dir',
+                               self.dir, '--keyframes', str(KEYFRAMES), '--previews', '0'],
+                              stdout=subprocess.DEVNULL)
+        with open(os.path.join(self.dir, 'demo_01_gt.yaml')) as f:
+            gt = yaml.safe_load(f)
+        self.assertTrue(util.wait_for_graph(util.INPUT_TOPICS, [NS + '/object_map']),
+                        'the estimator did not come up')
+        time.sleep(1.0)
+        util.play(os.path.join(self.dir, 'demo_01.bag'), rate=1.0)
+        time.sleep(2.0)
+        with self.lock:
+            maps, markers = list(self.maps), list(self.markers)
+        # The very last set may be held back by the approximate-time synchroniser.
+        self.assertGreaterEqual(len(maps), KEYFRAMES - 1)
+        final = maps[-1]
+        self.assertEqual(final.header.frame_id, 'map')
+        truth = [(o['class_name'], o['pose'][:3]) for o in gt['objects']]
+        matched, false = set(), 0
+        for o in final.objects:
+            p = (o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z)
+            best, best_i = 1e9, -1
+            for i, (name, q) in enumerate(truth):
+                if name == o.class_name and i not in matched and math.dist(p, q) < best:
+                    best, best_i = math.dist(p, q), i
+            if best < 0.02:
+                matched.add(best_i)
+            else:
+                false += 1
+            self.assertGreater(o.id, 0, 'id 0 is the support plane')
+            self.assertTrue(0.0 <= o.existence_score <= 1.0)
+        self.assertEqual(false, 0)
+        self.assertGreaterEqual(len(matched), len(truth) - 2)
+        self.assertTrue(final.has_support_plane)
+        self.assertAlmostEqual(-final.support_plane[3], gt['table']['height'], delta=0.01)
+        self.assertTrue(final.contacts, 'no contacts in the map')
+        ids = {o.id for o in final.objects} | {0}
+        for c in final.contacts:
+            self.assertIn(c.object_a, ids)
+            self.assertIn(c.object_b, ids)
+        # Markers: a DELETEALL first, one object marker and one label per object.
+        last = markers[-1]
+        self.assertEqual(last.markers[0].action, Marker.DELETEALL)
+        self.assertEqual(len([m for m in last.markers if m.ns == 'objects']), len(final.objects))
+        self.assertEqual(len([m for m in last.markers if m.ns == 'labels']), len(final.objects))
+        self.assertEqual(len([m for m in last.markers if m.ns == 'contacts']),
+                         len(final.contacts))
+        # map -> odom is on TF (no timeout in ROS time: the clock stopped with the bag).
+        self.assertTrue(self.tf_buffer.can_transform('map', 'odom', rospy.Time(0)),
+                        'no map -> odom on TF')
+        t = self.tf_buffer.lookup_transform('map', 'odom', rospy.Time(0))
+        self.assertLess(math.hypot(t.transform.translation.x, t.transform.translation.y), 0.1)
+        # Save, then reset.
+        rospy.wait_for_service(NS + '/save_map', 5.0)
+        prefix = os.path.join(self.dir, 'saved')
+        res = rospy.ServiceProxy(NS + '/save_map', SaveMap)(prefix)
+        self.assertTrue(res.success, res.message)
+        self.assertEqual(list(res.files), [prefix + '.yaml'])
+        with open(prefix + '.yaml') as f:
+            saved = yaml.safe_load(f)
+        self.assertEqual(len(saved['final_map']['objects']), len(final.objects))
+        res = rospy.ServiceProxy(NS + '/reset', Trigger)()
+        self.assertTrue(res.success)
+        time.sleep(0.5)
+        with self.lock:
+            self.assertEqual(len(self.maps[-1].objects), 0)
+
+
+if __name__ == '__main__':
+    rospy.init_node('estimator_checker')
+    rostest.rosrun('geofusion', 'estimator_replay', EstimatorReplayTest)
