@@ -22,16 +22,8 @@ DetectionViewer::DetectionViewer(ros::NodeHandle nh, ros::NodeHandle pnh)
   axis_length_m_ = paramAtLeast(pnh_, "axis_length_m", 0.05, 0.005);
   tf_timeout_s_ = paramAtLeast(pnh_, "tf_timeout_s", 0.1, 0.0);
 
-  RgbdDetectionSubscriber::Config sub;
-  pnh_.param("rgb_topic", sub.rgb_topic, sub.rgb_topic);
-  pnh_.param("depth_topic", sub.depth_topic, sub.depth_topic);
-  pnh_.param("camera_info_topic", sub.camera_info_topic, sub.camera_info_topic);
-  pnh_.param("detections_topic", sub.detections_topic, sub.detections_topic);
-  sub.queue_size = paramAtLeast(pnh_, "queue_size", 10, 1);
-  sub.max_interval_s = paramAtLeast(pnh_, "sync_max_interval_s", 0.05, 0.0);
-  sub.warn_period_s = warn_period_s_;
-  sub.monitor.stale_after_s = paramAtLeast(pnh_, "stale_after_s", 3.0, 0.1);
-  sub.monitor.sync_timeout_s = paramAtLeast(pnh_, "sync_timeout_s", 3.0, 0.1);
+  const RgbdDetectionSubscriber::Config sub =
+      RgbdDetectionSubscriber::configFromParams(pnh_, warn_period_s_);
 
   markers_pub_ = pnh_.advertise<visualization_msgs::MarkerArray>("detection_markers", 5);
 

@@ -1,8 +1,25 @@
 #include "geofusion/ros/rgbd_detection_subscriber.h"
 
+#include "geofusion/ros/params.h"
+
 #include <boost/bind/bind.hpp>
 
 namespace geofusion {
+
+RgbdDetectionSubscriber::Config RgbdDetectionSubscriber::configFromParams(
+    const ros::NodeHandle& pnh, double warn_period_s) {
+  Config sub;
+  pnh.param("rgb_topic", sub.rgb_topic, sub.rgb_topic);
+  pnh.param("depth_topic", sub.depth_topic, sub.depth_topic);
+  pnh.param("camera_info_topic", sub.camera_info_topic, sub.camera_info_topic);
+  pnh.param("detections_topic", sub.detections_topic, sub.detections_topic);
+  sub.queue_size = paramAtLeast(pnh, "queue_size", 10, 1);
+  sub.max_interval_s = paramAtLeast(pnh, "sync_max_interval_s", 0.05, 0.0);
+  sub.warn_period_s = warn_period_s;
+  sub.monitor.stale_after_s = paramAtLeast(pnh, "stale_after_s", 3.0, 0.1);
+  sub.monitor.sync_timeout_s = paramAtLeast(pnh, "sync_timeout_s", 3.0, 0.1);
+  return sub;
+}
 
 namespace {
 double wallNow() {

@@ -59,14 +59,8 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   save_srv_ = pnh_.advertiseService("save_map", &SceneEstimatorNode::onSave, this);
   reset_srv_ = pnh_.advertiseService("reset", &SceneEstimatorNode::onReset, this);
 
-  RgbdDetectionSubscriber::Config sub;
-  pnh_.param("rgb_topic", sub.rgb_topic, sub.rgb_topic);
-  pnh_.param("depth_topic", sub.depth_topic, sub.depth_topic);
-  pnh_.param("camera_info_topic", sub.camera_info_topic, sub.camera_info_topic);
-  pnh_.param("detections_topic", sub.detections_topic, sub.detections_topic);
-  sub.queue_size = paramAtLeast(pnh_, "queue_size", 10, 1);
-  sub.max_interval_s = paramAtLeast(pnh_, "sync_max_interval_s", 0.05, 0.0);
-  sub.warn_period_s = warn_period_s_;
+  const RgbdDetectionSubscriber::Config sub =
+      RgbdDetectionSubscriber::configFromParams(pnh_, warn_period_s_);
   subscriber_ = std::make_unique<RgbdDetectionSubscriber>(
       nh_, sub,
       [this](const auto& rgb, const auto& depth, const auto& info, const auto& dets) {

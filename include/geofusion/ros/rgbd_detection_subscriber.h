@@ -41,6 +41,10 @@ class RgbdDetectionSubscriber {
     InputMonitor::Config monitor;
   };
 
+  /// The config from a node's private parameters (rgb_topic, depth_topic, camera_info_topic,
+  /// detections_topic, queue_size, sync_max_interval_s, stale_after_s, sync_timeout_s).
+  static Config configFromParams(const ros::NodeHandle& pnh, double warn_period_s);
+
   using FrameCallback = std::function<void(
       const sensor_msgs::ImageConstPtr& rgb, const sensor_msgs::ImageConstPtr& depth,
       const sensor_msgs::CameraInfoConstPtr& info, const geofusion::DetectionArrayConstPtr& dets)>;
