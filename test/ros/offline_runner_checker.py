@@ -101,6 +101,30 @@ class OfflineRunnerTest(unittest.TestCase):
         # Fewer objects than B-SLAM, which keeps every stray detection.
         self.assertLess(len(final), len(self.results['bslam'][2]['final_map']['objects']))
 
+    def test_evaluate_run_summarises_against_the_truth(self):
+        script = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', 'src',
+                              'tools', 'evaluate_run.py')
+        gt = os.path.join(self.dir, 'demo_01_gt.yaml')
+        p = subprocess.run(['/usr/bin/python3', script, '--results',
+                            os.path.join(self.dir, 'geofusion.yaml'), '--ground-truth', gt],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        self.assertIn('0 false', p.stdout)
+        sys.path.insert(0, os.path.dirname(script))
+        import evaluate_run  # noqa: E402
+        geo = evaluate_run.summarize(self.results['geofusion'][2], self.gt)
+        bslam = evaluate_run.summarize(self.results['bslam'][2], self.gt)
+        self.assertGreaterEqual(geo['objects_found'], geo['objects_seen'] - 1)
+        self.assertEqual(geo['false_objects'], 0)
+        self.assertGreater(bslam['false_objects'], 0)
+        self.assertLess(geo['position_error_mm'], 10.0)
+        self.assertGreater(geo['contacts_correct'], 0)
+        self.assertGreaterEqual(geo['contacts_correct'], 0.7 * geo['contacts_found'])
+        p = subprocess.run(['/usr/bin/python3', script, '--results', '/nonexistent.yaml',
+                            '--ground-truth', gt], stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, universal_newlines=True)
+        self.assertEqual(p.returncode, 2)
+
     def test_bad_requests_are_refused(self):
         tool = util.find_tool('run_offline')
         p = subprocess.run([tool, '--bag', self.bag, '--out', os.path.join(self.dir, 'x.yaml'),
