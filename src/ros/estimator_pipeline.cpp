@@ -2,6 +2,8 @@
 
 #include "geofusion/ros/conversions.h"
 
+#include <chrono>
+
 namespace geofusion {
 
 bool loadModelSet(const std::string& spec, const std::string& models_dir, ModelSet* models,
@@ -20,14 +22,18 @@ bool loadModelSet(const std::string& spec, const std::string& models_dir, ModelS
 
 EstimatorPipeline::EstimatorPipeline(const ModelSet& models, const EstimatorConfig& estimator,
                                      const KeyframeSelectorConfig& keyframes,
-                                     const FrameByFrame::Config& checks)
+                                     const FrameByFrame::Config& checks,
+                                     const BackgroundMapConfig* background)
     : estimator_(std::make_unique<SceneEstimator>(models, estimator)),
       selector_(keyframes),
-      checker_(checks) {}
+      checker_(checks) {
+  if (background) background_ = std::make_unique<BackgroundMap>(*background);
+}
 
 void EstimatorPipeline::reset() {
   estimator_->reset();
   selector_.reset();
+  if (background_) background_->clear();
   tally_ = DetectionTally();
 }
 
@@ -51,6 +57,14 @@ EstimatorPipeline::Outcome EstimatorPipeline::process(const sensor_msgs::Image& 
     kf.detections.push_back(d.measurement);
   }
   *result = estimator_->addKeyframe(kf);
+  if (background_) {
+    const auto start = std::chrono::steady_clock::now();
+    std::vector<MaskObject> objects;
+    for (const ObjectEstimate& o : result->objects) objects.push_back({o.model, o.T_map_obj});
+    background_->insert(kf.depth, K, result->T_map_cam, objects);
+    background_ms_ =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  }
   return Outcome::kKeyframe;
 }
 

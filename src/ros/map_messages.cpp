@@ -3,6 +3,9 @@
 #include "geofusion/core/class_palette.h"
 #include "geofusion/ros/conversions.h"
 
+#include <sensor_msgs/point_cloud2_iterator.h>
+
+#include <algorithm>
 #include <cstdio>
 
 namespace geofusion {
@@ -201,6 +204,47 @@ visualization_msgs::MarkerArray mapMarkers(const KeyframeResult& r, const Suppor
     out.markers.push_back(table);
   }
   return out;
+}
+
+visualization_msgs::MarkerArray backgroundMarkers(const std::vector<Eigen::Vector3d>& centres,
+                                                  double resolution_m,
+                                                  const std_msgs::Header& header) {
+  visualization_msgs::MarkerArray out;
+  visualization_msgs::Marker m;
+  m.header = header;
+  m.ns = "background";
+  m.id = 0;
+  m.type = visualization_msgs::Marker::CUBE_LIST;
+  m.action = centres.empty() ? visualization_msgs::Marker::DELETE : visualization_msgs::Marker::ADD;
+  m.pose.orientation.w = 1.0;
+  m.scale.x = m.scale.y = m.scale.z = resolution_m;
+  double lo = 1e9, hi = -1e9;
+  for (const auto& c : centres) lo = std::min(lo, c.z()), hi = std::max(hi, c.z());
+  for (const auto& c : centres) {
+    m.points.push_back(point(c));
+    const double t = hi > lo ? (c.z() - lo) / (hi - lo) : 0.5;
+    const Rgb rgb = hsvToRgb(0.66 * (1.0 - t), 0.8, 0.9);  // blue low, red high
+    std_msgs::ColorRGBA colour;
+    colour.r = rgb.r, colour.g = rgb.g, colour.b = rgb.b, colour.a = 1.0f;
+    m.colors.push_back(colour);
+  }
+  out.markers.push_back(m);
+  return out;
+}
+
+sensor_msgs::PointCloud2 pointCloud(const std::vector<Eigen::Vector3d>& points,
+                                    const std_msgs::Header& header) {
+  sensor_msgs::PointCloud2 cloud;
+  cloud.header = header;
+  sensor_msgs::PointCloud2Modifier modifier(cloud);
+  modifier.setPointCloud2FieldsByString(1, "xyz");
+  modifier.resize(points.size());
+  sensor_msgs::PointCloud2Iterator<float> x(cloud, "x"), y(cloud, "y"), z(cloud, "z");
+  for (const auto& p : points) {
+    *x = static_cast<float>(p.x()), *y = static_cast<float>(p.y()), *z = static_cast<float>(p.z());
+    ++x, ++y, ++z;
+  }
+  return cloud;
 }
 
 }  // namespace geofusion

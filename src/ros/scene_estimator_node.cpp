@@ -8,6 +8,7 @@
 
 #include <geofusion/ObjectMap.h>
 #include <nav_msgs/Path.h>
+#include <sensor_msgs/PointCloud2.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <visualization_msgs/MarkerArray.h>
 
@@ -51,11 +52,21 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   } else {
     for (const auto& e : errors) ROS_WARN_STREAM("geofusion: " << e);
   }
-  pipeline_ = std::make_unique<EstimatorPipeline>(models, config, keyframes);
+  bool background = true;
+  pnh_.param("background", background, true);
+  BackgroundMapConfig background_config;
+  background_config.resolution_m = paramAtLeast(pnh_, "background_resolution_m", 0.02, 0.002);
+  background_config.max_range_m = paramAtLeast(pnh_, "background_max_range_m", 2.5, 0.1);
+  background_publish_every_ = paramAtLeast(pnh_, "background_publish_every", 5, 1);
+  pipeline_ = std::make_unique<EstimatorPipeline>(models, config, keyframes, FrameByFrame::Config(),
+                                                  background ? &background_config : nullptr);
 
   map_pub_ = pnh_.advertise<geofusion::ObjectMap>("object_map", 1, true);
   markers_pub_ = pnh_.advertise<visualization_msgs::MarkerArray>("map_markers", 1, true);
   path_pub_ = pnh_.advertise<nav_msgs::Path>("trajectory", 1, true);
+  background_markers_pub_ =
+      pnh_.advertise<visualization_msgs::MarkerArray>("background_markers", 1, true);
+  background_cloud_pub_ = pnh_.advertise<sensor_msgs::PointCloud2>("background_cloud", 1, true);
   save_srv_ = pnh_.advertiseService("save_map", &SceneEstimatorNode::onSave, this);
   reset_srv_ = pnh_.advertiseService("reset", &SceneEstimatorNode::onReset, this);
 
@@ -148,6 +159,23 @@ void SceneEstimatorNode::publish(const KeyframeResult& result, const std_msgs::H
   }
   path_pub_.publish(path);
   broadcastCorrection(header.stamp);
+  if (keyframes_ % static_cast<std::size_t>(background_publish_every_) == 1 ||
+      background_publish_every_ == 1 || result.objects.empty()) {
+    publishBackground(header);
+  }
+}
+
+void SceneEstimatorNode::publishBackground(const std_msgs::Header& header) {
+  std::vector<Eigen::Vector3d> centres;
+  double resolution = 0.0;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!pipeline_->background()) return;
+    centres = pipeline_->background()->occupiedCentres();
+    resolution = pipeline_->background()->config().resolution_m;
+  }
+  background_markers_pub_.publish(backgroundMarkers(centres, resolution, header));
+  background_cloud_pub_.publish(pointCloud(centres, header));
 }
 
 void SceneEstimatorNode::broadcastCorrection(const ros::Time& stamp) {
@@ -193,6 +221,16 @@ bool SceneEstimatorNode::save(const std::string& prefix, std::string* message,
     return false;
   }
   files->push_back(path);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (pipeline_->background()) {
+      if (!pipeline_->background()->writeBinary(prefix + ".bt", &error)) {
+        *message = "objects saved to " + path + " but the background not: " + error;
+        return false;
+      }
+      files->push_back(prefix + ".bt");
+    }
+  }
   *message = "map saved to " + path + " (" + std::to_string(results.final_map.objects.size()) +
              " objects, " + std::to_string(results.final_map.contacts.size()) + " contacts)";
   return true;

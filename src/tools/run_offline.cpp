@@ -4,7 +4,7 @@
 //   run_offline --bag FILE.bag --out results.yaml [--method geofusion|fbf|bslam|rfront]
 //       [--model-set primitives|ycb_video|FILE.yaml] [--models DIR] [--keyframe-every N]
 //       [--depth-topic T] [--camera-info-topic T] [--detections-topic T] [--odom-frame odom]
-//       [--quiet]
+//       [--background FILE.bt] [--quiet]
 #include "command_line.h"
 #include "geofusion/core/run_results.h"
 #include "geofusion/core/scene_estimator.h"
@@ -38,6 +38,7 @@ struct Options {
   std::string info_topic = "/head_camera/rgb/camera_info";
   std::string detections_topic = "/detections";
   std::string odom_frame = "odom";
+  std::string background;  ///< .bt file of the background OctoMap; empty: none
   bool quiet = false;
 };
 
@@ -46,7 +47,8 @@ void usage() {
                "geofusion|fbf|bslam|rfront]\n"
                "         [--model-set primitives|ycb_video|FILE.yaml] [--models DIR]\n"
                "         [--keyframe-every N=1] [--depth-topic T] [--camera-info-topic T]\n"
-               "         [--detections-topic T] [--odom-frame odom] [--quiet]\n";
+               "         [--detections-topic T] [--odom-frame odom] [--background FILE.bt]\n"
+               "         [--quiet]\n";
 }
 
 Options parse(int argc, char** argv) {
@@ -74,6 +76,8 @@ Options parse(int argc, char** argv) {
       o.detections_topic = args.value();
     else if (a == "--odom-frame")
       o.odom_frame = args.value();
+    else if (a == "--background")
+      o.background = args.value();
     else if (a == "--quiet")
       o.quiet = true;
     else if (a == "-h" || a == "--help") {
@@ -149,7 +153,9 @@ int main(int argc, char** argv) {
   config.method = method;
   KeyframeSelectorConfig keyframes;
   keyframes.every_n_frames = opt.keyframe_every;
-  EstimatorPipeline pipeline(models, config, keyframes);
+  const BackgroundMapConfig background_config;
+  EstimatorPipeline pipeline(models, config, keyframes, FrameByFrame::Config(),
+                             opt.background.empty() ? nullptr : &background_config);
   RunResults results;
   results.method = toString(method);
   results.source = opt.bag;
@@ -229,6 +235,15 @@ int main(int argc, char** argv) {
   if (!writeRunResults(opt.out, results, &error)) {
     std::cerr << "run_offline: " << error << "\n";
     return 1;
+  }
+  if (pipeline.background()) {
+    if (!pipeline.background()->writeBinary(opt.background, &error)) {
+      std::cerr << "run_offline: " << error << "\n";
+      return 1;
+    }
+    std::printf("run_offline: background OctoMap (%zu occupied voxels of %.0f mm) in %s\n",
+                pipeline.background()->occupiedCentres().size(),
+                1000 * background_config.resolution_m, opt.background.c_str());
   }
   std::printf(
       "run_offline: %s on %s: %zu keyframes (%d sets, %d skipped), %zu objects, %zu contacts; "

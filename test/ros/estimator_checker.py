@@ -17,6 +17,8 @@ import yaml
 from geofusion.msg import ObjectMap
 from geofusion.srv import SaveMap
 from std_srvs.srv import Trigger
+from sensor_msgs import point_cloud2
+from sensor_msgs.msg import PointCloud2
 from visualization_msgs.msg import Marker, MarkerArray
 
 import geofusion_test_utils as util
@@ -31,6 +33,9 @@ class EstimatorReplayTest(unittest.TestCase):
         self.maps, self.markers = [], []
         rospy.Subscriber(NS + '/object_map', ObjectMap, self.on_map, queue_size=100)
         rospy.Subscriber(NS + '/map_markers', MarkerArray, self.on_markers, queue_size=100)
+        self.clouds = []
+        rospy.Subscriber(NS + '/background_cloud', PointCloud2,
+                         lambda m: self.clouds.append(m), queue_size=100)
         self.dir = tempfile.mkdtemp(prefix='geofusion_estimator_')
         self.tf_buffer = tf2_ros.Buffer()
         self.tf_listener = tf2_ros.TransformListener(self.tf_buffer)
@@ -98,12 +103,26 @@ class EstimatorReplayTest(unittest.TestCase):
                         'no map -> odom on TF')
         t = self.tf_buffer.lookup_transform('map', 'odom', rospy.Time(0))
         self.assertLess(math.hypot(t.transform.translation.x, t.transform.translation.y), 0.1)
+        # The background: the table is in it, the objects are not.
+        self.assertTrue(self.clouds, 'no background cloud published')
+        points = list(point_cloud2.read_points(self.clouds[-1], field_names=('x', 'y', 'z')))
+        self.assertGreater(len(points), 500)
+        table = gt['table']['height']
+        on_table = [p for p in points if abs(p[2] - table) < 0.03]
+        self.assertGreater(len(on_table), 0.3 * len(points), 'the table is not in the background')
+        for o in final.objects:
+            c = (o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z)
+            r = 0.35 * min(o.bbox_size.x, o.bbox_size.y, o.bbox_size.z)
+            inside = [p for p in points if math.dist(p, c) < r]
+            self.assertFalse(inside, 'background voxels inside %s' % o.class_name)
         # Save, then reset.
         rospy.wait_for_service(NS + '/save_map', 5.0)
         prefix = os.path.join(self.dir, 'saved')
         res = rospy.ServiceProxy(NS + '/save_map', SaveMap)(prefix)
         self.assertTrue(res.success, res.message)
-        self.assertEqual(list(res.files), [prefix + '.yaml'])
+        self.assertEqual(list(res.files), [prefix + '.yaml', prefix + '.bt'])
+        with open(prefix + '.bt', 'rb') as f:
+            self.assertTrue(f.readline().startswith(b'# Octomap OcTree binary file'))
         with open(prefix + '.yaml') as f:
             saved = yaml.safe_load(f)
         self.assertEqual(len(saved['final_map']['objects']), len(final.objects))

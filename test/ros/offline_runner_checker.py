@@ -40,8 +40,10 @@ class OfflineRunnerTest(unittest.TestCase):
         cls.results = {}
         for method in ('fbf', 'bslam', 'rfront', 'geofusion'):
             out = os.path.join(cls.dir, method + '.yaml')
+            extra = ['--background', os.path.join(cls.dir, 'background.bt')] \
+                if method == 'geofusion' else []
             p = subprocess.run([util.find_tool('run_offline'), '--bag', cls.bag, '--out', out,
-                                '--method', method, '--quiet'], stdout=subprocess.PIPE,
+                                '--method', method, '--quiet'] + extra, stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE, universal_newlines=True, timeout=600)
             cls.results[method] = (p.returncode, p.stdout + p.stderr,
                                    load(out) if p.returncode == 0 else None)
@@ -98,6 +100,9 @@ class OfflineRunnerTest(unittest.TestCase):
         for c in res['final_map']['contacts']:
             self.assertTrue(c['a'] == -1 or c['a'] in ids)
             self.assertIn(c['b'], ids)
+        # The background OctoMap file was written whole.
+        with open(os.path.join(self.dir, 'background.bt'), 'rb') as f:
+            self.assertTrue(f.readline().startswith(b'# Octomap OcTree binary file'))
         # Fewer objects than B-SLAM, which keeps every stray detection.
         self.assertLess(len(final), len(self.results['bslam'][2]['final_map']['objects']))
 

@@ -4,6 +4,7 @@
 // differs.
 #pragma once
 
+#include "geofusion/core/background_map.h"
 #include "geofusion/core/frame_by_frame.h"
 #include "geofusion/core/keyframe_selector.h"
 #include "geofusion/core/scene_estimator.h"
@@ -28,9 +29,12 @@ class EstimatorPipeline {
  public:
   enum class Outcome { kKeyframe, kNotKeyframe, kBadDepth };
 
+  /// `background` non-null: every keyframe's depth, minus the map's objects, also goes into a
+  /// background OctoMap.
   EstimatorPipeline(const ModelSet& models, const EstimatorConfig& estimator,
                     const KeyframeSelectorConfig& keyframes,
-                    const FrameByFrame::Config& checks = FrameByFrame::Config());
+                    const FrameByFrame::Config& checks = FrameByFrame::Config(),
+                    const BackgroundMapConfig* background = nullptr);
 
   /// One synchronised frame with its odometry camera pose. A keyframe fills `result`.
   Outcome process(const sensor_msgs::Image& depth, const sensor_msgs::CameraInfo& info,
@@ -38,11 +42,16 @@ class EstimatorPipeline {
                   KeyframeResult* result);
 
   SceneEstimator& estimator() { return *estimator_; }
+  /// The background map, or null when the pipeline has none.
+  BackgroundMap* background() { return background_.get(); }
+  double lastBackgroundMs() const { return background_ms_; }
   const DetectionTally& tally() const { return tally_; }  ///< detections used and skipped
   void reset();
 
  private:
   std::unique_ptr<SceneEstimator> estimator_;
+  std::unique_ptr<BackgroundMap> background_;
+  double background_ms_ = 0.0;
   KeyframeSelector selector_;
   FrameByFrame checker_;
   DetectionTally tally_;

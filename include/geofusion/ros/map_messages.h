@@ -6,6 +6,7 @@
 #include "geofusion/core/scene_estimator.h"
 
 #include <geofusion/ObjectMap.h>
+#include <sensor_msgs/PointCloud2.h>
 #include <std_msgs/Header.h>
 #include <visualization_msgs/MarkerArray.h>
 
@@ -29,5 +30,13 @@ geofusion::ObjectMap toObjectMapMsg(const KeyframeResult& result, const SupportP
 /// every contact and the support plane.
 visualization_msgs::MarkerArray mapMarkers(const KeyframeResult& result, const SupportPlane& plane,
                                            const std_msgs::Header& header);
+
+/// Occupied background voxels as one CUBE_LIST (ns "background"), coloured by height.
+visualization_msgs::MarkerArray backgroundMarkers(const std::vector<Eigen::Vector3d>& centres,
+                                                  double resolution_m,
+                                                  const std_msgs::Header& header);
+/// Points (x, y, z float32) as a PointCloud2.
+sensor_msgs::PointCloud2 pointCloud(const std::vector<Eigen::Vector3d>& points,
+                                    const std_msgs::Header& header);
 
 }  // namespace geofusion

@@ -32,6 +32,7 @@ class SceneEstimatorNode {
   void onTimeJump(const ros::Time& from, const ros::Time& to);
   void publish(const KeyframeResult& result, const std_msgs::Header& header);
   void broadcastCorrection(const ros::Time& stamp);
+  void publishBackground(const std_msgs::Header& header);
   bool onSave(geofusion::SaveMap::Request& req, geofusion::SaveMap::Response& res);
   bool onReset(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   bool save(const std::string& prefix, std::string* message, std::vector<std::string>* files);
@@ -52,7 +53,8 @@ class SceneEstimatorNode {
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   tf2_ros::TransformBroadcaster tf_broadcaster_;
-  ros::Publisher map_pub_, markers_pub_, path_pub_;
+  ros::Publisher map_pub_, markers_pub_, path_pub_, background_markers_pub_, background_cloud_pub_;
+  int background_publish_every_ = 5;
   ros::ServiceServer save_srv_, reset_srv_;
   std::unique_ptr<RgbdDetectionSubscriber> subscriber_;
 };

@@ -1,0 +1,136 @@
+#include "geofusion/core/background_map.h"
+
+#include "geofusion/core/renderer.h"
+
+#include <octomap/OcTree.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+namespace geofusion {
+
+struct BackgroundMap::Impl {
+  explicit Impl(double resolution) : tree(resolution) {}
+  octomap::OcTree tree;
+  std::shared_ptr<OffscreenRenderer> renderer;
+  std::map<std::shared_ptr<const ObjectModel>, MeshHandle> meshes;
+  RenderedImages rendered;
+};
+
+BackgroundMap::BackgroundMap(const BackgroundMapConfig& config,
+                             std::shared_ptr<OffscreenRenderer> renderer)
+    : config_(config), impl_(std::make_unique<Impl>(config.resolution_m)) {
+  impl_->renderer = renderer ? std::move(renderer) : std::make_shared<OffscreenRenderer>();
+}
+
+BackgroundMap::~BackgroundMap() = default;
+
+void BackgroundMap::clear() {
+  impl_->tree.clear();
+}
+
+std::size_t BackgroundMap::numLeaves() const {
+  return impl_->tree.getNumLeafNodes();
+}
+
+int BackgroundMap::insert(const DepthImageView& depth, const PinholeIntrinsics& K,
+                          const Eigen::Isometry3d& T_map_cam,
+                          const std::vector<MaskObject>& objects) {
+  if (!depth.data || depth.width != K.width || depth.height != K.height || !K.valid() ||
+      !T_map_cam.matrix().allFinite()) {
+    return 0;
+  }
+  // The map's objects as the camera sees them: their pixels and depth.
+  std::vector<RenderItem> items;
+  const Eigen::Isometry3d T_cam_map = T_map_cam.inverse();
+  for (const MaskObject& o : objects) {
+    if (!o.model) continue;
+    auto it = impl_->meshes.find(o.model);
+    if (it == impl_->meshes.end()) {
+      it = impl_->meshes.emplace(o.model, impl_->renderer->addMesh(o.model->mesh)).first;
+    }
+    if (it->second < 0) continue;
+    RenderItem item;
+    item.mesh = it->second;
+    item.T_cam_model = T_cam_map * o.T_map_obj;
+    item.instance_id = 1;
+    items.push_back(item);
+  }
+  const std::size_t n = static_cast<std::size_t>(K.width) * K.height;
+  std::vector<float> object_depth(n, 0.f);
+  std::vector<char> near_object(n, 0);
+  if (!items.empty() && impl_->renderer->ok()) {
+    impl_->renderer->render(K, items, &impl_->rendered, PixelBox{}, OffscreenRenderer::kDepth);
+    const int m = std::max(0, config_.object_margin_px);
+    for (int v = 0; v < K.height; ++v) {
+      for (int u = 0; u < K.width; ++u) {
+        const float z = impl_->rendered.depthAt(u, v);
+        if (!(z > 0.f)) continue;
+        object_depth[static_cast<std::size_t>(v) * K.width + u] = z;
+        for (int dv = -m; dv <= m; ++dv) {
+          for (int du = -m; du <= m; ++du) {
+            const int uu = u + du, vv = v + dv;
+            if (uu >= 0 && vv >= 0 && uu < K.width && vv < K.height)
+              near_object[static_cast<std::size_t>(vv) * K.width + uu] = 1;
+          }
+        }
+      }
+    }
+  }
+  octomap::Pointcloud cloud;
+  const int stride = std::max(1, config_.pixel_stride);
+  for (int v = 0; v < K.height; v += stride) {
+    for (int u = 0; u < K.width; u += stride) {
+      const std::size_t i = static_cast<std::size_t>(v) * K.width + u;
+      const float z = depth.at(u, v);
+      if (!(z > 0.f) || !std::isfinite(z) || z > config_.max_range_m) continue;
+      if (near_object[i]) {
+        // On or behind an object (or at its rim): not background. Clearly in front of it:
+        // something else, keep it.
+        const float zo = object_depth[i];
+        if (!(zo > 0.f) || z > zo - config_.object_margin_m) continue;
+      }
+      const Eigen::Vector3d p = T_map_cam * K.backProject(u, v, z);
+      cloud.push_back(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                      static_cast<float>(p.z()));
+    }
+  }
+  const Eigen::Vector3d o = T_map_cam.translation();
+  impl_->tree.insertPointCloud(
+      cloud,
+      octomap::point3d(static_cast<float>(o.x()), static_cast<float>(o.y()),
+                       static_cast<float>(o.z())),
+      config_.max_range_m, false, true);
+  return static_cast<int>(cloud.size());
+}
+
+std::vector<Eigen::Vector3d> BackgroundMap::occupiedCentres() const {
+  std::vector<Eigen::Vector3d> out;
+  for (auto it = impl_->tree.begin_leafs(); it != impl_->tree.end_leafs(); ++it) {
+    if (impl_->tree.isNodeOccupied(*it)) out.emplace_back(it.getX(), it.getY(), it.getZ());
+  }
+  return out;
+}
+
+bool BackgroundMap::isOccupied(const Eigen::Vector3d& p) const {
+  const octomap::OcTreeNode* node = impl_->tree.search(p.x(), p.y(), p.z());
+  return node && impl_->tree.isNodeOccupied(node);
+}
+
+bool BackgroundMap::writeBinary(const std::string& path, std::string* error) const {
+  const std::string tmp = path + ".tmp";
+  octomap::OcTree copy(impl_->tree);  // writeBinary prunes: keep ours as it is
+  if (!copy.writeBinary(tmp)) {
+    if (error) *error = "cannot write " + tmp;
+    return false;
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    if (error) *error = "cannot rename " + tmp + " to " + path;
+    return false;
+  }
+  return true;
+}
+
+}  // namespace geofusion
