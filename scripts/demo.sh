@@ -20,3 +20,25 @@ say "what it found against the ground truth:"
 say "the map (objects, contacts, trajectory, timings): $out/demo_01_geofusion.yaml"
 say "the static background (OctoMap, objects removed): $out/demo_01_background.bt"
 say "frames of the recording as PNG: $out/previews/"
+
+# A screenshot of the result in rviz (rviz/geofusion.rviz), when Xvfb and ImageMagick are here:
+# the recording replayed through the estimator nodelet with simulated time.
+shot="$out/demo_01_rviz.png"
+if command -v Xvfb >/dev/null && command -v import >/dev/null; then
+  say "replaying the recording through the estimator nodelet and rviz under Xvfb for a screenshot"
+  display=":$((90 + RANDOM % 9))"
+  Xvfb "$display" -screen 0 1280x1024x24 -nolisten tcp >/dev/null 2>&1 &
+  xvfb_pid=$!
+  DISPLAY="$display" roslaunch --skip-log-check geofusion replay.launch bag:="$out/demo_01.bag" \
+    rviz:=true stop_at_end:=false >"$out/demo_rviz.log" 2>&1 &
+  launch_pid=$!
+  trap 'kill -INT $launch_pid 2>/dev/null || true; kill $xvfb_pid 2>/dev/null || true' EXIT
+  sleep 28  # 2 s start delay, 12 s of recording, rviz settling
+  DISPLAY="$display" import -window root "$shot"
+  kill -INT $launch_pid; wait $launch_pid || true
+  kill $xvfb_pid || true
+  trap - EXIT
+  say "rviz screenshot of the map: $shot"
+else
+  say "no Xvfb/ImageMagick: skipping the rviz screenshot"
+fi

@@ -103,7 +103,61 @@ int BackgroundMap::insert(const DepthImageView& depth, const PinholeIntrinsics& 
       octomap::point3d(static_cast<float>(o.x()), static_cast<float>(o.y()),
                        static_cast<float>(o.z())),
       config_.max_range_m, false, true);
+  carve(objects);
   return static_cast<int>(cloud.size());
+}
+
+void BackgroundMap::carve(const std::vector<MaskObject>& objects) {
+  // Objects confirmed after their surfaces went in (or seen where the mask missed them) must
+  // not stay in the background: voxels inside their boxes (plus the margin) are set free. A
+  // pruned leaf stands for all its finest-level children: each of them is set.
+  std::vector<octomap::point3d> doomed;
+  octomap::OcTree& tree = impl_->tree;
+  for (const MaskObject& o : objects) {
+    if (!o.model) continue;
+    Eigen::Vector3f lo, hi;
+    o.model->mesh.bounds(&lo, &hi);
+    const Eigen::Vector3d centre = (0.5f * (lo + hi)).cast<double>();
+    const Eigen::Vector3d half =
+        (0.5f * (hi - lo)).cast<double>() + Eigen::Vector3d::Constant(config_.object_margin_m);
+    Eigen::Vector3d box_lo = Eigen::Vector3d::Constant(1e9), box_hi = -box_lo;
+    for (int k = 0; k < 8; ++k) {
+      const Eigen::Vector3d corner(k & 1 ? half.x() : -half.x(), k & 2 ? half.y() : -half.y(),
+                                   k & 4 ? half.z() : -half.z());
+      const Eigen::Vector3d p = o.T_map_obj * (centre + corner);
+      box_lo = box_lo.cwiseMin(p), box_hi = box_hi.cwiseMax(p);
+    }
+    const Eigen::Isometry3d T_obj_map = o.T_map_obj.inverse();
+    for (auto it = tree.begin_leafs_bbx(
+             octomap::point3d(static_cast<float>(box_lo.x()), static_cast<float>(box_lo.y()),
+                              static_cast<float>(box_lo.z())),
+             octomap::point3d(static_cast<float>(box_hi.x()), static_cast<float>(box_hi.y()),
+                              static_cast<float>(box_hi.z())));
+         it != tree.end_leafs_bbx(); ++it) {
+      if (!tree.isNodeOccupied(*it)) continue;
+      auto inside = [&](const Eigen::Vector3d& p) {
+        const Eigen::Vector3d q = T_obj_map * p - centre;
+        return std::abs(q.x()) <= half.x() && std::abs(q.y()) <= half.y() &&
+               std::abs(q.z()) <= half.z();
+      };
+      const double size = it.getSize(), res = tree.getResolution();
+      const int n = std::max(1, static_cast<int>(std::lround(size / res)));
+      for (int i = 0; i < n; ++i) {
+        for (int j = 0; j < n; ++j) {
+          for (int k = 0; k < n; ++k) {
+            const Eigen::Vector3d p(it.getX() - 0.5 * size + (i + 0.5) * res,
+                                    it.getY() - 0.5 * size + (j + 0.5) * res,
+                                    it.getZ() - 0.5 * size + (k + 0.5) * res);
+            if (inside(p)) {
+              doomed.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                                  static_cast<float>(p.z()));
+            }
+          }
+        }
+      }
+    }
+  }
+  for (const auto& p : doomed) tree.setNodeValue(p, tree.getClampingThresMinLog());
 }
 
 std::vector<Eigen::Vector3d> BackgroundMap::occupiedCentres() const {

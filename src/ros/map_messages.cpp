@@ -180,12 +180,15 @@ visualization_msgs::MarkerArray mapMarkers(const KeyframeResult& r, const Suppor
     arrow.type = Marker::ARROW;
     arrow.action = Marker::ADD;
     arrow.pose.orientation.w = 1.0;
-    arrow.points = {point(a), point(b)};  // from the supporter to the supported feature
-    arrow.scale.x = 0.004, arrow.scale.y = 0.01, arrow.scale.z = 0.01;
-    // P2P red, P2C green, C2C blue.
+    // A short arrow along the contact normal (the support direction for support contacts),
+    // ending at the supported feature: it sits where the objects touch.
+    (void)a;
+    arrow.points = {point(b - 0.05 * c.normal), point(b)};
+    arrow.scale.x = 0.005, arrow.scale.y = 0.012, arrow.scale.z = 0.015;
+    // P2P magenta, P2C green, C2C cyan.
     arrow.color.r = c.type == ContactType::kPlanePlane ? 1.0f : 0.1f;
-    arrow.color.g = c.type == ContactType::kPlaneCurve ? 1.0f : 0.1f;
-    arrow.color.b = c.type == ContactType::kCurveCurve ? 1.0f : 0.1f;
+    arrow.color.g = c.type == ContactType::kPlanePlane ? 0.1f : 1.0f;
+    arrow.color.b = c.type == ContactType::kPlaneCurve ? 0.1f : 1.0f;
     arrow.color.a = 1.0f;
     out.markers.push_back(arrow);
   }

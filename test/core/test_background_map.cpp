@@ -69,6 +69,15 @@ TEST(BackgroundMap, TableInObjectsOut) {
   }
   EXPECT_GT(box_unmasked, 20);
   EXPECT_EQ(box_masked, 0);
+  // An object that joins the map later is carved out of what was inserted before it.
+  const DepthImageView last{scene.frames[0].depth.data(), scene.K.width, scene.K.height};
+  unmasked.insert(last, scene.K, scene.cameras[0], {{scene.box, scene.T_box}});
+  int box_after = 0;
+  for (const Eigen::Vector3d& p : unmasked.occupiedCentres()) {
+    const Eigen::Vector3d q = scene.T_box.inverse() * p;
+    box_after += std::abs(q.x()) < 0.06 && std::abs(q.y()) < 0.06 && q.z() > -0.09 && q.z() < 0.11;
+  }
+  EXPECT_EQ(box_after, 0);
   // The .bt file is written whole.
   const std::string path = ::testing::TempDir() + "/geofusion_background.bt";
   std::string error;

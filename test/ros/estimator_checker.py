@@ -27,6 +27,21 @@ NS = '/scene_estimator'
 KEYFRAMES = 24
 
 
+def inside_box(obj, p):
+    """Whether p lies inside the object's box (its model frame is centred on the box)."""
+    q = obj.pose.pose.orientation
+    x, y, z, w = q.x, q.y, q.z, q.w
+    # Rotate p - t by the inverse rotation.
+    d = [p[0] - obj.pose.pose.position.x, p[1] - obj.pose.pose.position.y,
+         p[2] - obj.pose.pose.position.z]
+    r = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+         [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+         [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
+    local = [sum(r[i][k] * d[i] for i in range(3)) for k in range(3)]
+    half = (obj.bbox_size.x / 2, obj.bbox_size.y / 2, obj.bbox_size.z / 2)
+    return all(abs(local[k]) < half[k] for k in range(3))
+
+
 class EstimatorReplayTest(unittest.TestCase):
     def setUp(self):
         self.lock = threading.Lock()
@@ -111,9 +126,7 @@ class EstimatorReplayTest(unittest.TestCase):
         on_table = [p for p in points if abs(p[2] - table) < 0.03]
         self.assertGreater(len(on_table), 0.3 * len(points), 'the table is not in the background')
         for o in final.objects:
-            c = (o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z)
-            r = 0.35 * min(o.bbox_size.x, o.bbox_size.y, o.bbox_size.z)
-            inside = [p for p in points if math.dist(p, c) < r]
+            inside = [p for p in points if inside_box(o, p)]
             self.assertFalse(inside, 'background voxels inside %s' % o.class_name)
         # Save, then reset.
         rospy.wait_for_service(NS + '/save_map', 5.0)

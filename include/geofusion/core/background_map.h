@@ -47,6 +47,8 @@ class BackgroundMap {
   /// Writes the tree as an OctoMap binary file (.bt), through a temporary file and a rename.
   bool writeBinary(const std::string& path, std::string* error) const;
   void clear();
+  /// Removes the voxels inside the objects' boxes (plus object_margin_m); insert() does it.
+  void carve(const std::vector<MaskObject>& objects);
   const BackgroundMapConfig& config() const { return config_; }
 
  private:
