@@ -2,6 +2,8 @@
 
 #include "geofusion/core/renderer.h"
 
+#include "atomic_file.h"
+
 #include <octomap/OcTree.h>
 
 #include <algorithm>
@@ -174,17 +176,13 @@ bool BackgroundMap::isOccupied(const Eigen::Vector3d& p) const {
 }
 
 bool BackgroundMap::writeBinary(const std::string& path, std::string* error) const {
-  const std::string tmp = path + ".tmp";
-  octomap::OcTree copy(impl_->tree);  // writeBinary prunes: keep ours as it is
-  if (!copy.writeBinary(tmp)) {
-    if (error) *error = "cannot write " + tmp;
-    return false;
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    if (error) *error = "cannot rename " + tmp + " to " + path;
-    return false;
-  }
-  return true;
+  return writeFileAtomically(
+      path,
+      [&](const std::string& tmp) {
+        octomap::OcTree copy(impl_->tree);  // writeBinary prunes: keep ours as it is
+        return copy.writeBinary(tmp);
+      },
+      error);
 }
 
 }  // namespace geofusion

@@ -2,6 +2,8 @@
 #pragma once
 
 #include <yaml-cpp/yaml.h>
+#include "atomic_file.h"
+
 #include <Eigen/Geometry>
 
 #include <cstdio>
@@ -27,20 +29,14 @@ inline bool writeAtomically(const std::string& path, const std::string& header,
     if (error) *error = "YAML emitter: " + out.GetLastError();
     return false;
   }
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream file(tmp);
-    file << header << out.c_str() << "\n";
-    if (!file.good()) {
-      if (error) *error = "cannot write " + tmp;
-      return false;
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    if (error) *error = "cannot rename " + tmp + " to " + path;
-    return false;
-  }
-  return true;
+  return writeFileAtomically(
+      path,
+      [&](const std::string& tmp) {
+        std::ofstream file(tmp);
+        file << header << out.c_str() << "\n";
+        return file.good();
+      },
+      error);
 }
 
 }  // namespace yaml_io
