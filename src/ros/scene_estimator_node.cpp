@@ -70,6 +70,30 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   save_srv_ = pnh_.advertiseService("save_map", &SceneEstimatorNode::onSave, this);
   reset_srv_ = pnh_.advertiseService("reset", &SceneEstimatorNode::onReset, this);
 
+  reconfigure_ = std::make_unique<dynamic_reconfigure::Server<geofusion::SceneEstimatorConfig>>(
+      reconfigure_mutex_, pnh_);
+  {
+    const EstimatorConfig& c = pipeline_->estimator().config();
+    geofusion::SceneEstimatorConfig initial;
+    initial.min_score = c.min_detection_score;
+    initial.tf_timeout_s = tf_timeout_s_;
+    initial.eps_new = c.association.eps_new;
+    initial.eps_fp = c.association.eps_fp;
+    initial.merge_ratio = c.association.merge_ratio;
+    initial.merge_min_penetration_m = c.association.merge_min_penetration_m;
+    initial.sigma_position_m = c.association.sigma_position_m;
+    initial.sigma_rotation_rad = c.association.sigma_rotation_rad;
+    initial.stage_one_every_n_keyframes = c.stage_one.every_n_keyframes;
+    initial.measurement_sigma_position_m = c.stage_one.measurement_sigma_position_m;
+    initial.measurement_sigma_rotation_rad = c.stage_one.measurement_sigma_rotation_rad;
+    initial.contact_sigma_distance_m = c.stage_two.contact_sigma_distance_m;
+    initial.contact_sigma_direction = c.stage_two.contact_sigma_direction;
+    initial.prior_sigma_position_m = c.stage_two.prior_sigma_position_m;
+    reconfigure_->updateConfig(initial);
+  }
+  reconfigure_->setCallback(
+      [this](geofusion::SceneEstimatorConfig& c, uint32_t level) { onReconfigure(c, level); });
+
   const RgbdDetectionSubscriber::Config sub =
       RgbdDetectionSubscriber::configFromParams(pnh_, warn_period_s_);
   subscriber_ = std::make_unique<RgbdDetectionSubscriber>(
@@ -190,6 +214,26 @@ void SceneEstimatorNode::broadcastCorrection(const ros::Time& stamp) {
   t.header.frame_id = map_frame_;
   t.child_frame_id = odom_frame_;
   tf_broadcaster_.sendTransform(t);
+}
+
+void SceneEstimatorNode::onReconfigure(geofusion::SceneEstimatorConfig& config, uint32_t) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  EstimatorConfig c = pipeline_->estimator().config();
+  c.min_detection_score = config.min_score;
+  c.association.eps_new = config.eps_new;
+  c.association.eps_fp = config.eps_fp;
+  c.association.merge_ratio = config.merge_ratio;
+  c.association.merge_min_penetration_m = config.merge_min_penetration_m;
+  c.association.sigma_position_m = config.sigma_position_m;
+  c.association.sigma_rotation_rad = config.sigma_rotation_rad;
+  c.stage_one.every_n_keyframes = config.stage_one_every_n_keyframes;
+  c.stage_one.measurement_sigma_position_m = config.measurement_sigma_position_m;
+  c.stage_one.measurement_sigma_rotation_rad = config.measurement_sigma_rotation_rad;
+  c.stage_two.contact_sigma_distance_m = config.contact_sigma_distance_m;
+  c.stage_two.contact_sigma_direction = config.contact_sigma_direction;
+  c.stage_two.prior_sigma_position_m = config.prior_sigma_position_m;
+  pipeline_->estimator().setConfig(c);
+  tf_timeout_s_ = config.tf_timeout_s;
 }
 
 void SceneEstimatorNode::onTimeJump(const ros::Time& from, const ros::Time& to) {

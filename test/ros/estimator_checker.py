@@ -14,6 +14,7 @@ import rospy
 import rostest
 import tf2_ros
 import yaml
+from dynamic_reconfigure.client import Client
 from geofusion.msg import ObjectMap
 from geofusion.srv import SaveMap
 from std_srvs.srv import Trigger
@@ -144,6 +145,22 @@ class EstimatorReplayTest(unittest.TestCase):
         time.sleep(0.5)
         with self.lock:
             self.assertEqual(len(self.maps[-1].objects), 0)
+            n_before = len(self.maps)
+
+        # A dynamic_reconfigure change takes effect: with min_score 0.999 only the detections
+        # the detector is sure of are used. The same bag again also sends time backwards (a
+        # looping bag): the estimator resets with a warning and carries on.
+        first_sum = sum(o.num_measurements for o in final.objects)
+        Client(NS, timeout=10).update_configuration({'min_score': 0.999})
+        util.play(os.path.join(self.dir, 'demo_01.bag'), rate=2.0)
+        time.sleep(2.0)
+        with self.lock:
+            self.assertGreater(len(self.maps), n_before + KEYFRAMES // 2,
+                               'no maps after the time jump')
+            second = self.maps[-1]
+        second_sum = sum(o.num_measurements for o in second.objects)
+        self.assertLess(second_sum, 0.6 * first_sum)
+        self.assertGreater(len(second.objects), 0)
 
 
 if __name__ == '__main__':

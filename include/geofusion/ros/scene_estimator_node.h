@@ -7,13 +7,17 @@
 #include "geofusion/ros/estimator_pipeline.h"
 #include "geofusion/ros/rgbd_detection_subscriber.h"
 
+#include <dynamic_reconfigure/server.h>
 #include <geofusion/SaveMap.h>
+#include <geofusion/SceneEstimatorConfig.h>
 #include <ros/ros.h>
 #include <std_srvs/Trigger.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
+#include <boost/thread/recursive_mutex.hpp>
 
+#include <atomic>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -35,11 +39,12 @@ class SceneEstimatorNode {
   void publishBackground(const std_msgs::Header& header);
   bool onSave(geofusion::SaveMap::Request& req, geofusion::SaveMap::Response& res);
   bool onReset(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
+  void onReconfigure(geofusion::SceneEstimatorConfig& config, uint32_t level);
   bool save(const std::string& prefix, std::string* message, std::vector<std::string>* files);
 
   ros::NodeHandle nh_, pnh_;
   std::string map_frame_, odom_frame_;
-  double tf_timeout_s_ = 0.1;
+  std::atomic<double> tf_timeout_s_{0.1};  // set by reconfigure, read by onFrame
   double warn_period_s_ = 5.0;
   bool publish_tf_ = true;
   std::string save_on_shutdown_;
@@ -56,6 +61,8 @@ class SceneEstimatorNode {
   ros::Publisher map_pub_, markers_pub_, path_pub_, background_markers_pub_, background_cloud_pub_;
   int background_publish_every_ = 5;
   ros::ServiceServer save_srv_, reset_srv_;
+  boost::recursive_mutex reconfigure_mutex_;
+  std::unique_ptr<dynamic_reconfigure::Server<geofusion::SceneEstimatorConfig>> reconfigure_;
   std::unique_ptr<RgbdDetectionSubscriber> subscriber_;
 };
 
