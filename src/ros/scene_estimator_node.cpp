@@ -15,7 +15,7 @@
 namespace geofusion {
 
 SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
-    : nh_(nh), pnh_(pnh), tf_listener_(tf_buffer_) {
+    : nh_(nh), pnh_(pnh), tf_listener_(tf_buffer_), diagnostics_(nh, pnh) {
   pnh_.param<std::string>("map_frame", map_frame_, "map");
   pnh_.param<std::string>("odom_frame", odom_frame_, "odom");
   pnh_.param("publish_map_to_odom", publish_tf_, true);
@@ -94,6 +94,11 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   reconfigure_->setCallback(
       [this](geofusion::SceneEstimatorConfig& c, uint32_t level) { onReconfigure(c, level); });
 
+  diagnostics_.setHardwareID("geofusion");
+  diagnostics_.add("scene estimator", this, &SceneEstimatorNode::diagnose);
+  diagnostics_timer_ = pnh_.createWallTimer(
+      ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { diagnostics_.force_update(); });
+
   const RgbdDetectionSubscriber::Config sub =
       RgbdDetectionSubscriber::configFromParams(pnh_, warn_period_s_);
   subscriber_ = std::make_unique<RgbdDetectionSubscriber>(
@@ -136,6 +141,7 @@ void SceneEstimatorNode::onFrame(const sensor_msgs::ImageConstPtr& /*rgb*/,
   KeyframeResult result;
   {
     std::lock_guard<std::mutex> lock(mutex_);
+    ++frames_;
     const auto outcome = pipeline_->process(*depth, *info, *dets, T_odom_cam, &result);
     if (outcome == EstimatorPipeline::Outcome::kBadDepth) {
       ++bad_depth_;
@@ -214,6 +220,35 @@ void SceneEstimatorNode::broadcastCorrection(const ros::Time& stamp) {
   t.header.frame_id = map_frame_;
   t.child_frame_id = odom_frame_;
   tf_broadcaster_.sendTransform(t);
+}
+
+void SceneEstimatorNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const StageTimings& t = last_.timings;
+  if (frames_ == 0) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no synchronised input yet");
+  } else if (tf_failures_ + bad_depth_ > frames_ / 2) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                   "most frames skipped (missing TF or unusable depth)");
+  } else {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "running");
+  }
+  status.add("method", method_name_);
+  status.add("synchronised frames", frames_);
+  status.add("synchronised by the subscriber", subscriber_ ? subscriber_->synchronizedCount() : 0);
+  status.add("keyframes", keyframes_);
+  status.add("frames without TF", tf_failures_);
+  status.add("frames with unusable depth", bad_depth_);
+  status.add("detections", pipeline_->tally().summary());
+  status.add("objects", last_.objects.size());
+  status.add("contacts", last_.contacts.size());
+  status.add("last keyframe ms: consistency", t.consistency_ms);
+  status.add("last keyframe ms: association", t.association_ms);
+  status.add("last keyframe ms: stage I", t.stage_one_ms);
+  status.add("last keyframe ms: relations", t.relations_ms);
+  status.add("last keyframe ms: stage II", t.stage_two_ms);
+  status.add("last keyframe ms: total", t.total_ms);
+  status.add("last keyframe ms: background", pipeline_->lastBackgroundMs());
 }
 
 void SceneEstimatorNode::onReconfigure(geofusion::SceneEstimatorConfig& config, uint32_t) {

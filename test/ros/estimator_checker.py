@@ -14,6 +14,7 @@ import rospy
 import rostest
 import tf2_ros
 import yaml
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from dynamic_reconfigure.client import Client
 from geofusion.msg import ObjectMap
 from geofusion.srv import SaveMap
@@ -49,7 +50,9 @@ class EstimatorReplayTest(unittest.TestCase):
         self.maps, self.markers = [], []
         rospy.Subscriber(NS + '/object_map', ObjectMap, self.on_map, queue_size=100)
         rospy.Subscriber(NS + '/map_markers', MarkerArray, self.on_markers, queue_size=100)
-        self.clouds = []
+        self.clouds, self.diagnostics = [], []
+        rospy.Subscriber('/diagnostics', DiagnosticArray,
+                         lambda m: self.diagnostics.extend(m.status), queue_size=100)
         rospy.Subscriber(NS + '/background_cloud', PointCloud2,
                          lambda m: self.clouds.append(m), queue_size=100)
         self.dir = tempfile.mkdtemp(prefix='geofusion_estimator_')
@@ -129,6 +132,14 @@ class EstimatorReplayTest(unittest.TestCase):
         for o in final.objects:
             inside = [p for p in points if inside_box(o, p)]
             self.assertFalse(inside, 'background voxels inside %s' % o.class_name)
+        # Diagnostics: running, with the keyframe count and the stage times.
+        mine = [d for d in self.diagnostics if 'scene estimator' in d.name]
+        self.assertTrue(mine, 'no diagnostics from the estimator')
+        last = mine[-1]
+        self.assertEqual(last.level, DiagnosticStatus.OK, last.message)
+        values = {kv.key: kv.value for kv in last.values}
+        self.assertGreaterEqual(int(values['keyframes']), KEYFRAMES - 1)
+        self.assertIn('last keyframe ms: stage II', values)
         # Save, then reset.
         rospy.wait_for_service(NS + '/save_map', 5.0)
         prefix = os.path.join(self.dir, 'saved')

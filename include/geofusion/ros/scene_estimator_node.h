@@ -7,6 +7,7 @@
 #include "geofusion/ros/estimator_pipeline.h"
 #include "geofusion/ros/rgbd_detection_subscriber.h"
 
+#include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
 #include <geofusion/SaveMap.h>
 #include <geofusion/SceneEstimatorConfig.h>
@@ -40,6 +41,7 @@ class SceneEstimatorNode {
   bool onSave(geofusion::SaveMap::Request& req, geofusion::SaveMap::Response& res);
   bool onReset(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   void onReconfigure(geofusion::SceneEstimatorConfig& config, uint32_t level);
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   bool save(const std::string& prefix, std::string* message, std::vector<std::string>* files);
 
   ros::NodeHandle nh_, pnh_;
@@ -61,6 +63,9 @@ class SceneEstimatorNode {
   ros::Publisher map_pub_, markers_pub_, path_pub_, background_markers_pub_, background_cloud_pub_;
   int background_publish_every_ = 5;
   ros::ServiceServer save_srv_, reset_srv_;
+  diagnostic_updater::Updater diagnostics_;
+  ros::WallTimer diagnostics_timer_;
+  std::size_t frames_ = 0;  // synchronised sets received
   boost::recursive_mutex reconfigure_mutex_;
   std::unique_ptr<dynamic_reconfigure::Server<geofusion::SceneEstimatorConfig>> reconfigure_;
   std::unique_ptr<RgbdDetectionSubscriber> subscriber_;
