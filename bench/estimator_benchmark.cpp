@@ -121,20 +121,10 @@ int main(int argc, char** argv) {
               objectsDetectedInFrames(scene, frames, 5));
 
   // FbF reference: each keyframe's true-class detections.
-  std::vector<double> fbf;
-  for (std::size_t k = 0; k < frames.size(); ++k) {
-    for (std::size_t d = 0; d < frames[k].detections.size(); ++d) {
-      const int t = frames[k].detection_truth[d];
-      if (t < 0) continue;
-      const SceneObject& o = scene.objects[static_cast<std::size_t>(t)];
-      if (o.model->name != frames[k].detections[d].class_name) continue;
-      Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-      T.linear() = frames[k].detections[d].orientation_cam.normalized().toRotationMatrix();
-      T.translation() = frames[k].detections[d].position_cam;
-      fbf.push_back(
-          addsError(o.model->points, T, poses[k].T_map_optical.inverse() * o.T_world_obj));
-    }
-  }
+  SequenceCalibration fbf_calibration;
+  for (std::size_t k = 0; k < frames.size(); ++k)
+    fbf_calibration.add(scene, poses[k].T_map_optical, frames[k]);
+  const std::vector<double> fbf = fbf_calibration.errors();
   std::printf(
       "FbF (per keyframe, true detections): ADD-S mean %.2f mm, < 1 cm %.1f %%, < 2 cm %.1f %%\n\n",
       1000.0 *

@@ -15,6 +15,14 @@ const char* toString(ContactType type) {
   return "?";
 }
 
+const char* shortName(ContactType type) {
+  switch (type) {
+    case ContactType::kPlanePlane: return "P2P";
+    case ContactType::kPlaneCurve: return "P2C";
+    default: return "C2C";
+  }
+}
+
 namespace {
 
 using Point2 = Eigen::Vector2d;

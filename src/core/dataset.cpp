@@ -111,18 +111,11 @@ Eigen::Isometry3d parsePose(const YAML::Node& n, const char* what) {
   return T;
 }
 
-const char* contactKey(ContactType t) {
-  switch (t) {
-    case ContactType::kPlanePlane: return "P2P";
-    case ContactType::kPlaneCurve: return "P2C";
-    default: return "C2C";
-  }
-}
-
 ContactType parseContactType(const std::string& s) {
-  if (s == "P2P") return ContactType::kPlanePlane;
-  if (s == "P2C") return ContactType::kPlaneCurve;
-  if (s == "C2C") return ContactType::kCurveCurve;
+  for (ContactType t :
+       {ContactType::kPlanePlane, ContactType::kPlaneCurve, ContactType::kCurveCurve}) {
+    if (s == shortName(t)) return t;
+  }
   throw std::runtime_error("unknown contact type '" + s + "'");
 }
 
@@ -189,7 +182,7 @@ bool writeGroundTruth(const std::string& path, const GroundTruth& gt, std::strin
     out << YAML::Flow << YAML::BeginMap;
     out << YAML::Key << "a" << YAML::Value << c.object_a;
     out << YAML::Key << "b" << YAML::Value << c.object_b;
-    out << YAML::Key << "type" << YAML::Value << contactKey(c.type);
+    out << YAML::Key << "type" << YAML::Value << shortName(c.type);
     out << YAML::Key << "feature_a" << YAML::Value << featureKey(c.feature_a);
     out << YAML::Key << "feature_b" << YAML::Value << featureKey(c.feature_b);
     out << YAML::Key << "support" << YAML::Value << c.support;
@@ -379,9 +372,14 @@ std::map<std::string, SequenceCalibration::ClassStats> SequenceCalibration::perC
   return out;
 }
 
-SequenceCalibration::ClassStats SequenceCalibration::overall() const {
+std::vector<double> SequenceCalibration::errors() const {
   std::vector<double> all;
   for (const auto& kv : adds_) all.insert(all.end(), kv.second.begin(), kv.second.end());
+  return all;
+}
+
+SequenceCalibration::ClassStats SequenceCalibration::overall() const {
+  const std::vector<double> all = errors();
   ClassStats s;
   s.detections = static_cast<int>(all.size());
   s.auc = accuracyAuc(all);

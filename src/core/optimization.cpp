@@ -5,7 +5,6 @@
 #include <ceres/ceres.h>
 #include <ceres/manifold.h>
 #include <ceres/product_manifold.h>
-#include <ceres/rotation.h>
 
 #include <array>
 #include <cmath>

@@ -42,10 +42,7 @@ void emitContacts(YAML::Emitter& out, const KeyframeResult& r) {
     out << YAML::Flow << YAML::BeginMap;
     out << YAML::Key << "a" << YAML::Value << id(c.object_a);  // -1: the support plane
     out << YAML::Key << "b" << YAML::Value << id(c.object_b);
-    out << YAML::Key << "type" << YAML::Value
-        << (c.type == ContactType::kPlanePlane   ? "P2P"
-            : c.type == ContactType::kPlaneCurve ? "P2C"
-                                                 : "C2C");
+    out << YAML::Key << "type" << YAML::Value << shortName(c.type);
     out << YAML::Key << "support" << YAML::Value << c.support;
     out << YAML::Key << "distance_residual" << YAML::Value << c.distance_residual;
     out << YAML::EndMap;

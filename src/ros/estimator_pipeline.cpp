@@ -1,5 +1,6 @@
 #include "geofusion/ros/estimator_pipeline.h"
 
+#include "geofusion/core/renderer.h"
 #include "geofusion/ros/conversions.h"
 
 #include <chrono>
@@ -24,10 +25,11 @@ EstimatorPipeline::EstimatorPipeline(const ModelSet& models, const EstimatorConf
                                      const KeyframeSelectorConfig& keyframes,
                                      const FrameByFrame::Config& checks,
                                      const BackgroundMapConfig* background)
-    : estimator_(std::make_unique<SceneEstimator>(models, estimator)),
-      selector_(keyframes),
-      checker_(checks) {
-  if (background) background_ = std::make_unique<BackgroundMap>(*background);
+    : selector_(keyframes), checker_(checks) {
+  // One OSMesa context for the consistency scores and the background's object masks.
+  auto renderer = std::make_shared<OffscreenRenderer>();
+  estimator_ = std::make_unique<SceneEstimator>(models, estimator, renderer);
+  if (background) background_ = std::make_unique<BackgroundMap>(*background, renderer);
 }
 
 void EstimatorPipeline::reset() {

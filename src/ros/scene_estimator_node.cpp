@@ -189,8 +189,9 @@ void SceneEstimatorNode::publish(const KeyframeResult& result, const std_msgs::H
   }
   path_pub_.publish(path);
   broadcastCorrection(header.stamp);
-  if (keyframes_ % static_cast<std::size_t>(background_publish_every_) == 1 ||
-      background_publish_every_ == 1 || result.objects.empty()) {
+  // Every N-th keyframe from the first, and on a reset (an empty map).
+  if ((keyframes_ - 1) % static_cast<std::size_t>(background_publish_every_) == 0 ||
+      result.objects.empty()) {
     publishBackground(header);
   }
 }

@@ -152,22 +152,11 @@ TEST(SceneEstimator, GeoFusionFindsTheObjectsAndDropsFalsePositives) {
 TEST(SceneEstimator, GeoFusionIsMoreAccurateThanFrameByFrame) {
   const Sequence& s = demoSequence();
   // FbF: every keyframe's true-class detections against the truth.
-  std::vector<double> fbf;
-  for (std::size_t k = 0; k < s.frames.size(); ++k) {
-    const Keyframe kf = keyframeOf(s, k);
-    (void)kf;
-    const auto& f = s.frames[k];
-    for (std::size_t d = 0; d < f.detections.size(); ++d) {
-      if (f.detection_truth[d] < 0) continue;
-      const auto& o = s.scene.objects[static_cast<std::size_t>(f.detection_truth[d])];
-      if (o.model->name != f.detections[d].class_name) continue;
-      Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-      T.linear() = f.detections[d].orientation_cam.normalized().toRotationMatrix();
-      T.translation() = f.detections[d].position_cam;
-      fbf.push_back(
-          addsError(o.model->points, T, s.poses[k].T_map_optical.inverse() * o.T_world_obj));
-    }
-  }
+  SequenceCalibration fbf_calibration;
+  for (std::size_t k = 0; k < s.frames.size(); ++k)
+    fbf_calibration.add(s.scene, s.poses[k].T_map_optical, s.frames[k]);
+  const std::vector<double> fbf = fbf_calibration.errors();
+  ASSERT_FALSE(fbf.empty());
   double fbf_mean = 0;
   for (double e : fbf) fbf_mean += e / fbf.size();
   const Score geo = run(Method::kGeoFusion);

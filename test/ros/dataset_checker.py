@@ -16,7 +16,6 @@ import unittest
 
 import numpy as np
 import rosbag
-import yaml
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import geofusion_test_utils as util  # noqa: E402
@@ -42,11 +41,8 @@ def digest(path):
 def matrix(pose):
     """4x4 from [x, y, z, qx, qy, qz, qw]."""
     x, y, z, qx, qy, qz, qw = pose
-    r = np.array([[1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)],
-                  [2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)],
-                  [2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)]])
     m = np.eye(4)
-    m[:3, :3] = r
+    m[:3, :3] = np.array(util.rotation(qx, qy, qz, qw))
     m[:3, 3] = [x, y, z]
     return m
 
@@ -63,8 +59,7 @@ class DatasetTest(unittest.TestCase):
         cls.rc, cls.out = generate(cls.dir)
         cls.bag = os.path.join(cls.dir, 'demo_01.bag')
         cls.gt_path = os.path.join(cls.dir, 'demo_01_gt.yaml')
-        with open(cls.gt_path) as f:
-            cls.gt = yaml.load(f, Loader=getattr(yaml, 'CSafeLoader', yaml.SafeLoader))
+        cls.gt = util.load_yaml(cls.gt_path)
 
     @classmethod
     def tearDownClass(cls):

@@ -13,7 +13,6 @@ import unittest
 import rospy
 import rostest
 import tf2_ros
-import yaml
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from dynamic_reconfigure.client import Client
 from geofusion.msg import ObjectMap
@@ -32,13 +31,10 @@ KEYFRAMES = 24
 def inside_box(obj, p):
     """Whether p lies inside the object's box (its model frame is centred on the box)."""
     q = obj.pose.pose.orientation
-    x, y, z, w = q.x, q.y, q.z, q.w
     # Rotate p - t by the inverse rotation.
     d = [p[0] - obj.pose.pose.position.x, p[1] - obj.pose.pose.position.y,
          p[2] - obj.pose.pose.position.z]
-    r = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-         [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-         [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
+    r = util.rotation(q.x, q.y, q.z, q.w)
     local = [sum(r[i][k] * d[i] for i in range(3)) for k in range(3)]
     half = (obj.bbox_size.x / 2, obj.bbox_size.y / 2, obj.bbox_size.z / 2)
     return all(abs(local[k]) < half[k] for k in range(3))
@@ -74,8 +70,7 @@ class EstimatorReplayTest(unittest.TestCase):
         subprocess.check_call([util.find_tool('generate_dataset'), '--suite', 'demo', '--out-dir',
                                self.dir, '--keyframes', str(KEYFRAMES), '--previews', '0'],
                               stdout=subprocess.DEVNULL)
-        with open(os.path.join(self.dir, 'demo_01_gt.yaml')) as f:
-            gt = yaml.safe_load(f)
+        gt = util.load_yaml(os.path.join(self.dir, 'demo_01_gt.yaml'))
         self.assertTrue(util.wait_for_graph(util.INPUT_TOPICS, [NS + '/object_map']),
                         'the estimator did not come up')
         time.sleep(1.0)
@@ -148,8 +143,7 @@ class EstimatorReplayTest(unittest.TestCase):
         self.assertEqual(list(res.files), [prefix + '.yaml', prefix + '.bt'])
         with open(prefix + '.bt', 'rb') as f:
             self.assertTrue(f.readline().startswith(b'# Octomap OcTree binary file'))
-        with open(prefix + '.yaml') as f:
-            saved = yaml.safe_load(f)
+        saved = util.load_yaml(prefix + '.yaml')
         self.assertEqual(len(saved['final_map']['objects']), len(final.objects))
         res = rospy.ServiceProxy(NS + '/reset', Trigger)()
         self.assertTrue(res.success)

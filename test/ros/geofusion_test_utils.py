@@ -49,3 +49,17 @@ def play(bag, rate=1.0):
 
 INPUT_TOPICS = ['/head_camera/rgb/image_raw', '/head_camera/depth_registered/image_raw',
                 '/head_camera/rgb/camera_info', '/detections']
+
+
+def load_yaml(path):
+    """A (possibly large) YAML file, with the C loader when there is one."""
+    with open(path) as f:
+        return yaml.load(f, Loader=getattr(yaml, 'CSafeLoader', yaml.SafeLoader))
+
+
+def rotation(qx, qy, qz, qw):
+    """3x3 rotation matrix (nested lists) of a unit quaternion."""
+    x, y, z, w = qx, qy, qz, qw
+    return [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]

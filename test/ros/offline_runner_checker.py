@@ -14,18 +14,12 @@ import sys
 import tempfile
 import unittest
 
-import yaml
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import geofusion_test_utils as util  # noqa: E402
 
 KEYFRAMES = 30
-LOADER = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
-
-
-def load(path):
-    with open(path) as f:
-        return yaml.load(f, Loader=LOADER)
+load = util.load_yaml
 
 
 class OfflineRunnerTest(unittest.TestCase):

@@ -15,7 +15,8 @@
 namespace geofusion {
 
 enum class ContactType { kPlanePlane, kPlaneCurve, kCurveCurve };
-const char* toString(ContactType type);  ///< "plane-plane", "plane-curve", "curve-curve"
+const char* toString(ContactType type);   ///< "plane-plane", "plane-curve", "curve-curve"
+const char* shortName(ContactType type);  ///< "P2P", "P2C", "C2C" (the files' spelling)
 
 struct FeatureRef {
   bool plane = true;  ///< index into SurfaceFeatures::planes, else ::curves

@@ -110,6 +110,8 @@ class SequenceCalibration {
   };
   std::map<std::string, ClassStats> perClass() const;
   ClassStats overall() const;
+  /// ADD-S of every true-class detection added so far, metres.
+  std::vector<double> errors() const;
   int detections() const { return detections_; }
   int falsePositives() const { return false_positives_; }
   int classSwaps() const { return swaps_; }
