@@ -2,10 +2,11 @@
 #   make demo   install what is missing, build, and run the demo
 #   make test   install what is missing, build, and run every test (exit code = result)
 #   make data SUITE=demo|bench   generate (or reuse) a data suite in ~/.cache/geofusion/data
-.PHONY: demo test data deps build lint clean help
+#   make bench [SUITE=demo]      the benchmark: four methods, report in results/<suite>/
+.PHONY: demo test data bench deps build lint clean help
 
 help:
-	@sed -n '2,5p' Makefile
+	@sed -n '2,6p' Makefile
 
 deps:
 	@bash scripts/install_deps.sh
@@ -21,6 +22,9 @@ demo: build
 
 data: build
 	@bash scripts/data.sh
+
+bench: build
+	@bash scripts/bench.sh
 
 lint:
 	@bash scripts/lint.sh

@@ -10,3 +10,6 @@ export PATH="/usr/bin:$PATH"
 export ROS_HOME="${ROS_HOME:-$GEOFUSION_WS/ros_home}"
 CATKIN_PY_ARGS=(-DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3)
 say() { echo "[geofusion] $*"; }
+# The benchmark's Python: a venv over Debian's python3 (numpy, matplotlib, yaml from Debian) with
+# pycocotools from PyPI (scripts/python_env.sh makes it).
+GEOFUSION_VENV="${GEOFUSION_VENV:-${XDG_CACHE_HOME:-$HOME/.cache}/geofusion/venv}"

@@ -366,4 +366,14 @@ double HullCollider::penetration(const std::shared_ptr<const ObjectModel>& a,
   return geofusion::penetration(&oa, &ob);
 }
 
+double HullCollider::distance(const std::shared_ptr<const ObjectModel>& a,
+                              const Eigen::Isometry3d& T_world_a,
+                              const std::shared_ptr<const ObjectModel>& b,
+                              const Eigen::Isometry3d& T_world_b) {
+  if (!a || !b) return 0.0;
+  fcl::CollisionObjectd oa(impl_->hull(a), fcl::Transform3d(T_world_a.matrix()));
+  fcl::CollisionObjectd ob(impl_->hull(b), fcl::Transform3d(T_world_b.matrix()));
+  return geofusion::distance(&oa, &ob);
+}
+
 }  // namespace geofusion

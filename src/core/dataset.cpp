@@ -96,29 +96,6 @@ bool makeSuiteScene(const SuiteSpec& suite, const SceneSpec& spec, const ModelSe
 // Ground-truth YAML.
 namespace {
 
-Eigen::Isometry3d parsePose(const YAML::Node& n, const char* what) {
-  if (!n || !n.IsSequence() || n.size() != 7) {
-    throw std::runtime_error(std::string(what) + ": expected [x, y, z, qx, qy, qz, qw]");
-  }
-  Eigen::Quaterniond q(n[6].as<double>(), n[3].as<double>(), n[4].as<double>(), n[5].as<double>());
-  if (!(std::abs(q.norm() - 1.0) < 1e-3)) {
-    throw std::runtime_error(std::string(what) + ": quaternion is not unit");
-  }
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = q.normalized().toRotationMatrix();
-  T.translation() = Eigen::Vector3d(n[0].as<double>(), n[1].as<double>(), n[2].as<double>());
-  if (!T.matrix().allFinite()) throw std::runtime_error(std::string(what) + ": not finite");
-  return T;
-}
-
-ContactType parseContactType(const std::string& s) {
-  for (ContactType t :
-       {ContactType::kPlanePlane, ContactType::kPlaneCurve, ContactType::kCurveCurve}) {
-    if (s == shortName(t)) return t;
-  }
-  throw std::runtime_error("unknown contact type '" + s + "'");
-}
-
 std::string featureKey(const FeatureRef& f) {
   return std::string(f.plane ? "plane " : "curve ") + std::to_string(f.index);
 }
@@ -261,7 +238,7 @@ bool readGroundTruth(const std::string& path, const ModelSet& models, GroundTrut
       SceneObject obj;
       for (const auto& m : models.models())
         if (m.get() == model) obj.model = m;
-      obj.T_world_obj = parsePose(o["pose"], "object pose");
+      obj.T_world_obj = yaml_io::parsePose(o["pose"], "object pose");
       g.scene.objects.push_back(obj);
     }
     g.scene.max_penetration_m = root["max_penetration_m"].as<double>(0.0);
@@ -273,7 +250,7 @@ bool readGroundTruth(const std::string& path, const ModelSet& models, GroundTrut
       if (fc.object_a < -1 || fc.object_a >= n || fc.object_b < -1 || fc.object_b >= n) {
         throw std::runtime_error("contact refers to an object that does not exist");
       }
-      fc.type = parseContactType(c["type"].as<std::string>());
+      fc.type = yaml_io::parseContactType(c["type"].as<std::string>());
       fc.feature_a = parseFeature(c["feature_a"].as<std::string>());
       fc.feature_b = parseFeature(c["feature_b"].as<std::string>());
       fc.support = c["support"].as<bool>();
@@ -286,10 +263,10 @@ bool readGroundTruth(const std::string& path, const ModelSet& models, GroundTrut
       fr.index = f["index"].as<int>();
       fr.stamp_s = f["stamp"].as<double>();
       fr.keyframe = f["keyframe"].as<bool>();
-      fr.T_map_base = parsePose(f["map_base"], "map_base");
-      fr.T_odom_base = parsePose(f["odom_base"], "odom_base");
-      fr.T_base_link = parsePose(f["base_camera_link"], "base_camera_link");
-      fr.T_map_optical = parsePose(f["map_camera"], "map_camera");
+      fr.T_map_base = yaml_io::parsePose(f["map_base"], "map_base");
+      fr.T_odom_base = yaml_io::parsePose(f["odom_base"], "odom_base");
+      fr.T_base_link = yaml_io::parsePose(f["base_camera_link"], "base_camera_link");
+      fr.T_map_optical = yaml_io::parsePose(f["map_camera"], "map_camera");
       if (fr.keyframe) {
         fr.visible_fraction = f["visible_fraction"].as<std::vector<double>>();
         fr.visible_pixels = f["visible_pixels"].as<std::vector<int>>();

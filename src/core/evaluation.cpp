@@ -38,11 +38,13 @@ MapScore scoreMap(const ClutterScene& scene, const std::vector<ObjectEstimate>& 
     }
     if (best_i >= 0 && best < max_adds_m) {
       taken[static_cast<std::size_t>(best_i)] = true;
+      sc.match.push_back(best_i);
       ++sc.true_positives;
       sc.adds_m.push_back(best);
       sc.mean_adds_m += best;
     } else {
       ++sc.false_positives;
+      sc.match.push_back(-1);
     }
   }
   if (sc.true_positives) sc.mean_adds_m /= sc.true_positives;

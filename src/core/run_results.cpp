@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <stdexcept>
 
 namespace geofusion {
 namespace {
@@ -72,6 +73,7 @@ bool writeRunResults(const std::string& path, const RunResults& r, std::string* 
   out << YAML::Key << "model_set" << YAML::Value << r.model_set;
   out << YAML::Key << "recording_duration_s" << YAML::Value << r.recording_duration_s;
   out << YAML::Key << "wall_time_s" << YAML::Value << r.wall_time_s;
+  out << YAML::Key << "peak_rss_mb" << YAML::Value << r.peak_rss_mb;
   out << YAML::Key << "realtime_factor" << YAML::Value
       << (r.recording_duration_s > 0 ? r.wall_time_s / r.recording_duration_s : 0.0);
   out << YAML::Key << "frames_seen" << YAML::Value << r.frames_seen;
@@ -94,6 +96,13 @@ bool writeRunResults(const std::string& path, const RunResults& r, std::string* 
   emitTimings(out, r.final_map.timings);
   emitObjects(out, r.final_map.objects, r.final_map.T_map_cam);
   emitContacts(out, r.final_map);
+  if (r.support_plane.valid) {
+    const Eigen::Vector3d& n = r.support_plane.normal;
+    out << YAML::Key << "support_plane" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "normal" << YAML::Value << YAML::Flow << YAML::BeginSeq << n.x() << n.y()
+        << n.z() << YAML::EndSeq;
+    out << YAML::Key << "height" << YAML::Value << r.support_plane.height << YAML::EndMap;
+  }
   out << YAML::EndMap;
   out << YAML::Key << "trajectory" << YAML::Value << YAML::BeginSeq;
   for (std::size_t i = 0; i < r.trajectory.size(); ++i) {
@@ -109,6 +118,104 @@ bool writeRunResults(const std::string& path, const RunResults& r, std::string* 
   return yaml_io::writeAtomically(
       path, "# GeoFusion run results (docs/results.md). Poses [x, y, z, qx, qy, qz, qw].\n", out,
       error);
+}
+
+namespace {
+
+std::vector<ObjectEstimate> readObjects(const YAML::Node& list, const ModelSet& models) {
+  std::vector<ObjectEstimate> objects;
+  for (const YAML::Node& o : list) {
+    ObjectEstimate e;
+    e.id = o["id"].as<int>();
+    const std::string name = o["class_name"].as<std::string>();
+    for (const auto& m : models.models())
+      if (m->name == name) e.model = m;
+    if (!e.model) throw std::runtime_error("class '" + name + "' is not in the model set");
+    e.existence = o["score"].as<double>();
+    e.false_positive = o["false_positive"].as<double>();
+    e.best_consistency = o["consistency"].as<double>();
+    e.measurements = o["measurements"].as<int>();
+    e.T_map_obj = yaml_io::parsePose(o["map_object"], "map_object");
+    objects.push_back(e);
+  }
+  return objects;
+}
+
+StageTimings readTimings(const YAML::Node& t) {
+  StageTimings s;
+  s.consistency_ms = t["consistency"].as<double>();
+  s.association_ms = t["association"].as<double>();
+  s.stage_one_ms = t["stage_one"].as<double>();
+  s.relations_ms = t["relations"].as<double>();
+  s.stage_two_ms = t["stage_two"].as<double>();
+  s.total_ms = t["total"].as<double>();
+  return s;
+}
+
+}  // namespace
+
+bool readRunResults(const std::string& path, const ModelSet& models, RunResults* results,
+                    std::string* error) {
+  try {
+    const YAML::Node root = YAML::LoadFile(path);
+    if (root["format"].as<std::string>("") != "geofusion_results_v1") {
+      throw std::runtime_error("not a geofusion_results_v1 file");
+    }
+    RunResults r;
+    r.method = root["method"].as<std::string>();
+    r.source = root["source"].as<std::string>("");
+    r.model_set = root["model_set"].as<std::string>("");
+    r.recording_duration_s = root["recording_duration_s"].as<double>();
+    r.wall_time_s = root["wall_time_s"].as<double>();
+    r.peak_rss_mb = root["peak_rss_mb"].as<double>(0.0);
+    r.frames_seen = root["frames_seen"].as<int>();
+    r.frames_skipped = root["frames_skipped"].as<int>();
+    for (const YAML::Node& k : root["keyframes"]) {
+      KeyframeResult kr;
+      kr.keyframe = k["index"].as<int>();
+      kr.stamp_s = k["stamp"].as<double>();
+      kr.T_map_cam = yaml_io::parsePose(k["map_camera"], "map_camera");
+      kr.timings = readTimings(k["timings_ms"]);
+      kr.removed_ids = k["removed_ids"].as<std::vector<int>>();
+      kr.objects = readObjects(k["objects"], models);
+      r.keyframes.push_back(std::move(kr));
+    }
+    const YAML::Node fm = root["final_map"];
+    r.final_map.timings = readTimings(fm["timings_ms"]);
+    r.final_map.objects = readObjects(fm["objects"], models);
+    if (!r.keyframes.empty()) r.final_map.T_map_cam = r.keyframes.back().T_map_cam;
+    auto index = [&](int id) {
+      if (id == -1) return -1;
+      for (std::size_t i = 0; i < r.final_map.objects.size(); ++i)
+        if (r.final_map.objects[i].id == id) return static_cast<int>(i);
+      throw std::runtime_error("contact refers to object " + std::to_string(id) +
+                               ", which is not in the final map");
+    };
+    for (const YAML::Node& c : fm["contacts"]) {
+      FeatureContact fc;
+      fc.object_a = index(c["a"].as<int>());
+      fc.object_b = index(c["b"].as<int>());
+      fc.type = yaml_io::parseContactType(c["type"].as<std::string>());
+      fc.support = c["support"].as<bool>();
+      fc.distance_residual = c["distance_residual"].as<double>();
+      r.final_map.contacts.push_back(fc);
+    }
+    if (const YAML::Node sp = fm["support_plane"]) {
+      r.support_plane.valid = true;
+      r.support_plane.normal = Eigen::Vector3d(
+          sp["normal"][0].as<double>(), sp["normal"][1].as<double>(), sp["normal"][2].as<double>());
+      r.support_plane.height = sp["height"].as<double>();
+    }
+    for (const YAML::Node& t : root["trajectory"]) {
+      r.trajectory_stamps.push_back(t["stamp"].as<double>());
+      r.trajectory.push_back(yaml_io::parsePose(t["map_camera"], "trajectory map_camera"));
+    }
+    *results = std::move(r);
+    return true;
+  } catch (const std::exception& e) {
+    if (error) *error = path + ": " + e.what();
+    return false;
+  }
 }
 
 }  // namespace geofusion

@@ -9,6 +9,7 @@
 #include "command_line.h"
 #include "geofusion/core/dataset.h"
 #include "geofusion/ros/recording_writer.h"
+#include "model_set_option.h"
 
 #include <sys/stat.h>
 #include <chrono>
@@ -109,11 +110,7 @@ Options parse(int argc, char** argv) {
         data ? std::string(data) : std::string(home ? home : "/tmp") + "/.cache/geofusion/data";
     o.out_dir = root + "/" + o.suite;
   }
-  if (o.models_dir.empty()) {
-    const char* env = std::getenv("GEOFUSION_YCB_DIR");
-    o.models_dir =
-        env ? std::string(env) : std::string(GEOFUSION_SOURCE_DIR) + "/../shared/data/ycb_video";
-  }
+  if (o.models_dir.empty()) o.models_dir = geofusion::defaultYcbDir();
   return o;
 }
 

@@ -9,6 +9,7 @@
 #include "geofusion/core/run_results.h"
 #include "geofusion/core/scene_estimator.h"
 #include "geofusion/ros/estimator_pipeline.h"
+#include "model_set_option.h"
 
 #include <geofusion/DetectionArray.h>
 #include <rosbag/bag.h>
@@ -18,6 +19,8 @@
 #include <tf2/buffer_core.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_msgs/TFMessage.h>
+
+#include <sys/resource.h>
 
 #include <chrono>
 #include <cstdio>
@@ -106,23 +109,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   ModelSet models;
-  {
-    std::string spec = opt.model_set, dir = opt.models_dir;
-    if (spec == "ycb_video") {
-      spec = std::string(GEOFUSION_SOURCE_DIR) + "/config/models/ycb_video.yaml";
-      if (dir.empty()) {
-        const char* env = std::getenv("GEOFUSION_YCB_DIR");
-        dir = env ? env : std::string(GEOFUSION_SOURCE_DIR) + "/../shared/data/ycb_video";
-      }
-    }
-    std::vector<std::string> errors;
-    if (!loadModelSet(spec, dir, &models, &errors)) {
-      std::cerr << "run_offline: cannot load the model set " << spec << "\n";
-      for (const auto& e : errors) std::cerr << "  " << e << "\n";
-      return 1;
-    }
-    for (const auto& e : errors) std::cerr << "run_offline: warning: " << e << "\n";
-  }
+  if (!loadModelSetOption("run_offline", opt.model_set, opt.models_dir, &models)) return 1;
 
   rosbag::Bag bag;
   try {
@@ -228,8 +215,11 @@ int main(int argc, char** argv) {
   results.final_map = pipeline.estimator().finish();
   results.trajectory = pipeline.estimator().trajectory();
   results.trajectory_stamps = pipeline.estimator().keyframeStamps();
+  results.support_plane = pipeline.estimator().supportPlane();
   results.wall_time_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  rusage usage{};
+  if (getrusage(RUSAGE_SELF, &usage) == 0) results.peak_rss_mb = usage.ru_maxrss / 1024.0;
   if (!opt.quiet) std::fprintf(stderr, "\n");
   std::string error;
   if (!writeRunResults(opt.out, results, &error)) {

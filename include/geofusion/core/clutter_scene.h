@@ -74,6 +74,9 @@ class HullCollider {
                      const Eigen::Isometry3d& T_world_a,
                      const std::shared_ptr<const ObjectModel>& b,
                      const Eigen::Isometry3d& T_world_b);
+  /// Distance between the two hulls, 0 when they touch or intersect.
+  double distance(const std::shared_ptr<const ObjectModel>& a, const Eigen::Isometry3d& T_world_a,
+                  const std::shared_ptr<const ObjectModel>& b, const Eigen::Isometry3d& T_world_b);
 
  private:
   struct Impl;

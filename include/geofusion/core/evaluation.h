@@ -23,6 +23,7 @@ struct MapScore {
   int false_positives = 0;     ///< everything else
   double mean_adds_m = 0.0;    ///< over true positives
   std::vector<double> adds_m;  ///< of each true positive
+  std::vector<int> match;      ///< per estimated object: the scene object it matched, or -1
 };
 
 /// Greedy one-to-one matching of estimated objects (map frame = scene world frame) to the

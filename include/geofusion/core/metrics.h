@@ -3,6 +3,7 @@
 
 #include <Eigen/Geometry>
 
+#include <memory>
 #include <vector>
 
 namespace geofusion {
@@ -15,6 +16,21 @@ double addError(const std::vector<Eigen::Vector3f>& points, const Eigen::Isometr
 /// estimated pose (nearest neighbour with a k-d tree; for symmetric objects).
 double addsError(const std::vector<Eigen::Vector3f>& points, const Eigen::Isometry3d& T_est,
                  const Eigen::Isometry3d& T_true);
+
+/// ADD-S that keeps one k-d tree per point set between calls (the benchmark scores many poses of a
+/// few models). Keyed by the point set's address: the points must outlive the evaluator and stay
+/// unchanged. addsError is this with a tree made for the one call.
+class AddsEvaluator {
+ public:
+  AddsEvaluator();
+  ~AddsEvaluator();
+  double operator()(const std::vector<Eigen::Vector3f>& points, const Eigen::Isometry3d& T_est,
+                    const Eigen::Isometry3d& T_true);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 /// Area under the accuracy-threshold curve for thresholds in [0, max_threshold], in percent
 /// (PoseCNN's AUC with max_threshold = 0.1 m). Errors above the range count as failures.

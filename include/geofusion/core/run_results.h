@@ -17,15 +17,23 @@ struct RunResults {
   std::string model_set;  ///< name of the model set
   double recording_duration_s = 0.0;
   double wall_time_s = 0.0;  ///< processing time of the whole run
+  double peak_rss_mb = 0.0;  ///< the process's peak resident memory at the end (0: unknown)
   int frames_seen = 0;       ///< synchronised RGB-D + detection sets
   int frames_skipped = 0;    ///< ... of which unusable (no TF, bad depth)
   std::vector<KeyframeResult> keyframes;
-  KeyframeResult final_map;  ///< after SceneEstimator::finish()
+  KeyframeResult final_map;    ///< after SceneEstimator::finish()
+  SupportPlane support_plane;  ///< the estimator's table plane (map frame), when it found one
   std::vector<double> trajectory_stamps;
   std::vector<Eigen::Isometry3d> trajectory;  ///< final estimate of T_map_cam per keyframe
 };
 
 /// Writes the results YAML atomically (temporary file, then rename).
 bool writeRunResults(const std::string& path, const RunResults& results, std::string* error);
+
+/// Reads a results YAML back (the evaluator's input). Object classes are looked up in `models`
+/// (an unknown class fails); contacts get indices into their objects again. The support plane
+/// comes back with its normal and height only.
+bool readRunResults(const std::string& path, const ModelSet& models, RunResults* results,
+                    std::string* error);
 
 }  // namespace geofusion

@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# The benchmark (docs/BENCHMARK.md): generates or reuses a suite (SUITE=bench, or demo), runs
+# FbF, B-SLAM, R-Front and GeoFusion on every scene with the offline runner, evaluates each run
+# against the ground truth (evaluate_run) and writes report.md, summary.json and the figures
+# (bench_report.py, COCO mAP by pycocotools) to results/<suite>/ (or BENCH_OUT).
+#   MODELS=DIR     YCB-Video models folder (default $GEOFUSION_YCB_DIR, else ../shared/data/ycb_video)
+#   GUARD=1        exit 1 unless GeoFusion beats FbF on mAP50:95 and precision50 (CI's guard)
+#   METHODS="..."  a subset of: fbf bslam rfront geofusion
+set -euo pipefail
+source "$(dirname "$0")/env.sh"
+bash "$GEOFUSION_SRC/scripts/python_env.sh"
+set +u
+source "$GEOFUSION_WS/devel/setup.bash"
+set -u
+suite="${SUITE:-bench}"
+data="$GEOFUSION_DATA/$suite"
+out="${BENCH_OUT:-$GEOFUSION_SRC/results/$suite}"
+bin="$GEOFUSION_WS/devel/lib/geofusion"
+models=()
+[ -n "${MODELS:-}" ] && models=(--models "$MODELS")
+start=$(date +%s)
+
+say "benchmark on suite '$suite': data in $data, results in $out"
+"$bin/generate_dataset" --suite "$suite" --out-dir "$data" "${models[@]}" | grep -E "^generate_dataset:" || true
+mkdir -p "$out/runs" "$out/eval"
+shopt -s nullglob
+bags=()
+for request in "$data"/*.request; do  # the suite's own scenes (generate_dataset's cache keys)
+  bags+=("${request%.request}.bag")
+done
+[ ${#bags[@]} -gt 0 ] || { say "no recordings in $data"; exit 1; }
+for bag in "${bags[@]}"; do
+  scene=$(basename "$bag" .bag)
+  gt="$data/${scene}_gt.yaml"
+  model_set=$(sed -n 's/^model_set: *//p' "$gt" | head -1)
+  mkdir -p "$out/runs/$scene" "$out/eval/$scene"
+  for method in ${METHODS:-fbf bslam rfront geofusion}; do
+    results="$out/runs/$scene/$method.yaml"
+    "$bin/run_offline" --bag "$bag" --out "$results" --method "$method" --model-set "$model_set" \
+      "${models[@]}" --quiet | sed 's/^run_offline: /  /'
+    "$bin/evaluate_run" --ground-truth "$gt" --results "$results" --model-set "$model_set" \
+      "${models[@]}" --json "$out/eval/$scene/$method.json" --quiet
+  done
+done
+say "runs and evaluation took $(( $(date +%s) - start )) s; writing the report"
+guard=()
+[ "${GUARD:-0}" = 1 ] && guard=(--guard)
+"$GEOFUSION_VENV/bin/python" "$GEOFUSION_SRC/src/tools/bench_report.py" --eval-dir "$out/eval" \
+  --out "$out" --suite "$suite" "${guard[@]}"
+say "report: $out/report.md (summary.json, figures beside it)"

@@ -1,0 +1,906 @@
+#!/usr/bin/env python3
+"""Benchmark report: reads the evaluation files of the four methods (FbF, B-SLAM, R-Front,
+GeoFusion) on every scene of a suite and writes the paper's tables and figures.
+
+    bench_report.py --eval-dir DIR --out OUTDIR [--suite NAME] [--commit SHA]
+                    [--plot-scene SCENE] [--guard]
+
+Input: DIR/<scene>/<method_slug>.json, format "geofusion_evaluation_v1" (one file per method and
+scene; the method's display name is the file's "method").
+
+Measures, per method over all scenes pooled and per scene:
+  * COCO bounding-box mAP (pycocotools): map50_95 = stats[0], map50 = stats[1], map75 = stats[2],
+    in percent. Ground truth less than 10 % visible is marked iscrowd=1, so pycocotools ignores
+    it: a detection on it is neither right nor wrong. Image and annotation ids are renumbered to
+    be unique over the pooled scenes.
+  * Precision and recall at score >= 0.5, at IoU 0.5 and 0.75, from pycocotools' own matching
+    (COCOeval.evalImgs, area range 'all', 100 detections an image): a true positive is a
+    detection matched to ground truth that is not ignored, a false positive an unmatched one that
+    is not ignored, recall's denominator the ground truth that is not ignored. Thresholding the
+    scores after the greedy by-score matching equals thresholding before it.
+  * ADD-S of the true positives at IoU 0.5 (the evaluation file's adds_m of the detection against
+    the matched annotation): share under 1 cm and 2 cm, the accuracy curve over [0, 2 cm], and the
+    YCB-Video AUC up to 10 cm (percent), which counts one error per ground-truth instance that is
+    not ignored, infinite when no true positive found it. A true positive without an ADD-S value
+    counts as infinite (and is counted in adds_missing).
+  * Contact graph precision, recall and F1 from the final maps' contact counts summed over scenes
+    (null for a method that infers no contacts).
+  * Physical plausibility: penetration and floating gap (mm) of the final maps, pooled.
+  * Time: per-keyframe total and per stage (median, 95th percentile, maximum), real-time factor
+    (summed wall time / summed recording duration), peak memory.
+
+Writes to OUTDIR: summary.json (no NaN; null for what cannot be measured), report.md, and the
+figures adds_curve.png, timing_<scene>.png and contact_graph_<scene>.png (GeoFusion on
+--plot-scene, the first scene by default). Prints a short table.
+
+Exit code: 0; 1 with --guard when GeoFusion is not ahead of FbF on mAP50:95 and on precision at
+score 0.5, IoU 0.5 (or one of them is missing); 2 for bad arguments, no or unreadable evaluation
+files.
+"""
+import argparse
+import contextlib
+import datetime
+import glob
+import io
+import json
+import math
+import os
+import platform
+import re
+import shlex
+import subprocess
+import sys
+
+import numpy as np
+import matplotlib
+matplotlib.use('Agg')
+import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
+from pycocotools.coco import COCO  # noqa: E402
+from pycocotools.cocoeval import COCOeval  # noqa: E402
+
+FORMAT = 'geofusion_evaluation_v1'
+METHOD_ORDER = ['FbF', 'B-SLAM', 'R-Front', 'GeoFusion']
+OURS = 'GeoFusion'
+BASELINE = 'FbF'
+SCORE_THRESHOLD = 0.5
+STAGES = ['consistency', 'association', 'stage_one', 'relations', 'stage_two']
+CONTACT_COLOURS = {'P2P': 'tab:blue', 'P2C': 'tab:orange', 'C2C': 'tab:green'}
+
+# The paper's figures: Table I (mAP, percent) and Table II (precision / recall at score 0.5).
+PAPER = {
+    'FbF': {'map50': 58.4, 'map75': 28.6, 'map50_95': 30.5,
+            'precision50': 0.87, 'recall50': 0.60, 'precision75': 0.56, 'recall75': 0.38},
+    'B-SLAM': {'map50': 56.0, 'map75': 24.6, 'map50_95': 27.9,
+               'precision50': 0.87, 'recall50': 0.27, 'precision75': 0.63, 'recall75': 0.19},
+    'R-Front': {'map50': 72.3, 'map75': 50.3, 'map50_95': 45.2,
+                'precision50': 0.91, 'recall50': 0.43, 'precision75': 0.75, 'recall75': 0.35},
+    'GeoFusion': {'map50': 73.4, 'map75': 59.5, 'map50_95': 50.3,
+                  'precision50': 0.99, 'recall50': 0.51, 'precision75': 0.91, 'recall75': 0.46},
+}
+
+REQUIRED_KEYS = [
+    'map50', 'map75', 'map50_95', 'precision50', 'recall50', 'precision75', 'recall75',
+    'adds_under_1cm', 'adds_under_2cm', 'adds_auc', 'contact_precision', 'contact_recall',
+    'contact_f1', 'penetration_mean_mm', 'penetration_max_mm', 'float_gap_mean_mm',
+    'ms_per_keyframe_p50', 'ms_per_keyframe_p95', 'realtime_factor']
+
+
+class EvalError(Exception):
+    """An evaluation file that cannot be used."""
+
+
+# ---------------------------------------------------------------------------------------------
+# Input
+
+def load_evals(eval_dir):
+    """Every DIR/<scene>/<slug>.json, sorted by scene then method order. Each dict gets '_path'
+    (the file), and 'scene' defaults to the directory's name. Raises EvalError."""
+    paths = sorted(glob.glob(os.path.join(eval_dir, '*', '*.json')))
+    evals, seen = [], {}
+    for path in paths:
+        try:
+            with open(path) as f:
+                ev = json.load(f)
+        except (OSError, ValueError) as e:
+            raise EvalError('%s: %s' % (path, e))
+        if not isinstance(ev, dict) or ev.get('format') != FORMAT:
+            raise EvalError('%s: not a %s file' % (path, FORMAT))
+        if not ev.get('method'):
+            raise EvalError('%s: no method name' % path)
+        ev.setdefault('scene', os.path.basename(os.path.dirname(path)))
+        ev['scene'] = str(ev['scene'] or os.path.basename(os.path.dirname(path)))
+        key = (ev['scene'], ev['method'])
+        if key in seen:
+            raise EvalError('%s: %s on %s again (also %s)' % (path, key[1], key[0], seen[key]))
+        seen[key] = path
+        ev['_path'] = path
+        evals.append(ev)
+    evals.sort(key=lambda ev: (ev['scene'], method_rank(ev['method'])))
+    return evals
+
+
+def method_rank(name):
+    """Sort key: the paper's order, other methods after it by name."""
+    return (METHOD_ORDER.index(name), '') if name in METHOD_ORDER else (len(METHOD_ORDER), name)
+
+
+def by_method(evals):
+    """{method: [evals sorted by scene]} in the paper's order."""
+    out = {}
+    for ev in sorted(evals, key=lambda ev: (method_rank(ev['method']), ev['scene'])):
+        out.setdefault(ev['method'], []).append(ev)
+    return out
+
+
+def scenes_of(evals):
+    return sorted({ev['scene'] for ev in evals})
+
+
+# ---------------------------------------------------------------------------------------------
+# COCO evaluation
+
+def build_coco_inputs(evals):
+    """Pooled ground truth (a COCO dataset dict) and results (a list for loadRes), with image and
+    annotation ids renumbered from 1 across the files. Also gt_origin {new annotation id:
+    (file index, file's annotation id)} and det_origin [(file index, detection dict)], whose
+    position p is the result id p + 1 that COCO.loadRes assigns."""
+    images, annotations, results = [], [], []
+    categories, gt_origin, det_origin = {}, {}, []
+    for k, ev in enumerate(evals):
+        where = ev.get('_path', ev.get('scene'))
+        size = ev.get('image_size') or [0, 0]
+        for c in ev.get('categories') or []:
+            categories.setdefault(int(c['id']), {'id': int(c['id']), 'name': str(c['name'])})
+        image_id = {}
+        for img in ev.get('images') or []:
+            if img['id'] in image_id:
+                raise EvalError('%s: image %s twice' % (where, img['id']))
+            image_id[img['id']] = len(images) + 1
+            images.append({'id': len(images) + 1, 'width': int(size[0]), 'height': int(size[1]),
+                           'file_name': '%s/%s' % (ev.get('scene'), img['id'])})
+        for a in ev.get('annotations') or []:
+            if a['image_id'] not in image_id:
+                raise EvalError('%s: annotation %s on unknown image %s'
+                                % (where, a.get('id'), a['image_id']))
+            x, y, w, h = (float(v) for v in a['bbox'])
+            new_id = len(annotations) + 1
+            annotations.append({'id': new_id, 'image_id': image_id[a['image_id']],
+                                'category_id': int(a['category_id']), 'bbox': [x, y, w, h],
+                                'area': float(a.get('area', w * h)),
+                                'iscrowd': int(a.get('iscrowd', 0))})
+            gt_origin[new_id] = (k, a['id'])
+        for d in ev.get('detections') or []:
+            if d['image_id'] not in image_id:
+                raise EvalError('%s: detection %s on unknown image %s'
+                                % (where, d.get('id'), d['image_id']))
+            results.append({'image_id': image_id[d['image_id']],
+                            'category_id': int(d['category_id']),
+                            'bbox': [float(v) for v in d['bbox']], 'score': float(d['score'])})
+            det_origin.append((k, d))
+    dataset = {'info': {'description': 'GeoFusion benchmark'}, 'images': images,
+               'annotations': annotations,
+               'categories': [categories[c] for c in sorted(categories)]}
+    return dataset, results, gt_origin, det_origin
+
+
+def _ratio(num, den):
+    return num / den if den else None
+
+
+def adds_metrics(tp_adds, gt_errors):
+    """ADD-S figures from the true positives' ADD-S (metres) and one error per ground-truth
+    instance (infinite when missed)."""
+    tp = np.asarray(tp_adds, dtype=float)
+    err = np.asarray(gt_errors, dtype=float)
+    out = {'adds_tp_count': int(tp.size),
+           'adds_under_1cm': float(np.mean(tp < 0.01)) if tp.size else None,
+           'adds_under_2cm': float(np.mean(tp < 0.02)) if tp.size else None,
+           # Area under the accuracy curve over [0, 2 cm], percent: integral of P(e < x).
+           'adds_auc_2cm': (100.0 * (1.0 - float(np.mean(np.minimum(tp, 0.02))) / 0.02)
+                            if tp.size else None),
+           # YCB-Video: AUC of the accuracy curve up to 10 cm over every ground-truth instance.
+           'adds_auc': (100.0 * (1.0 - float(np.mean(np.minimum(err, 0.1))) / 0.1)
+                        if err.size else None)}
+    finite = tp[np.isfinite(tp)]
+    out['adds_tp_median_m'] = float(np.median(finite)) if finite.size else None
+    return out
+
+
+def coco_metrics(evals, score_threshold=SCORE_THRESHOLD):
+    """COCO mAP, precision / recall at the score threshold (IoU 0.5 and 0.75) and the ADD-S of
+    the true positives, over the given evaluation files pooled. The list of the true positives'
+    ADD-S (metres) is returned under '_adds_tp_m' (kept out of summary.json)."""
+    dataset, results, gt_origin, det_origin = build_coco_inputs(evals)
+    cat_ids = {c['id'] for c in dataset['categories']}
+    gt = COCO()
+    with contextlib.redirect_stdout(io.StringIO()):
+        gt.dataset = dataset
+        gt.createIndex()
+    out = {'images': len(dataset['images']), 'detections': len(results),
+           'ground_truth': sum(1 for a in dataset['annotations']
+                               if not a['iscrowd'] and a['category_id'] in cat_ids)}
+    counts = {iou: {'tp': 0, 'fp': 0, 'gt': 0} for iou in (50, 75)}
+    tp_adds, missing = [], 0
+    gt_errors = {}
+    if not results:
+        # No detections: pycocotools cannot load an empty result list; nothing is found.
+        value = 0.0 if out['ground_truth'] else None
+        out.update(map50=value, map75=value, map50_95=value)
+        for iou in counts:
+            counts[iou]['gt'] = out['ground_truth']
+        gt_errors = {a['id']: math.inf for a in dataset['annotations']
+                     if not a['iscrowd'] and a['category_id'] in cat_ids}
+    else:
+        with contextlib.redirect_stdout(io.StringIO()):
+            dt = gt.loadRes([dict(r) for r in results])
+            coco_eval = COCOeval(gt, dt, 'bbox')
+            coco_eval.evaluate()
+            coco_eval.accumulate()
+            coco_eval.summarize()
+        stats = coco_eval.stats
+        # stats are -1 where pycocotools has no ground truth to measure against.
+        for key, i in (('map50_95', 0), ('map50', 1), ('map75', 2)):
+            out[key] = 100.0 * float(stats[i]) if stats[i] >= 0 else None
+        p = coco_eval.params
+        area_all = p.areaRng[p.areaRngLbl.index('all')]
+        t_index = {50: int(np.argmin(np.abs(p.iouThrs - 0.5))),
+                   75: int(np.argmin(np.abs(p.iouThrs - 0.75)))}
+        for e in coco_eval.evalImgs:
+            if e is None or list(e['aRng']) != list(area_all) or e['maxDet'] != p.maxDets[-1]:
+                continue
+            gt_ignore = np.asarray(e['gtIgnore'], dtype=bool)
+            for gid, ignored in zip(e['gtIds'], gt_ignore):
+                if not ignored:
+                    gt_errors[gid] = math.inf
+            for iou, t in t_index.items():
+                c = counts[iou]
+                c['gt'] += int(np.count_nonzero(~gt_ignore))
+                for j, (did, score) in enumerate(zip(e['dtIds'], e['dtScores'])):
+                    if score < score_threshold or e['dtIgnore'][t][j]:
+                        continue
+                    matched = int(e['dtMatches'][t][j])
+                    if not matched:
+                        c['fp'] += 1
+                        continue
+                    c['tp'] += 1
+                    if iou == 50:
+                        k, det = det_origin[did - 1]
+                        gk, gt_file_id = gt_origin[matched]
+                        assert gk == k, 'a detection matched ground truth of another file'
+                        value = (det.get('adds_m') or {}).get(str(gt_file_id))
+                        if value is None:
+                            missing += 1
+                            value = math.inf
+                        tp_adds.append(float(value))
+                        gt_errors[matched] = float(value)
+    for iou, c in counts.items():
+        out['tp%d' % iou], out['fp%d' % iou], out['gt%d' % iou] = c['tp'], c['fp'], c['gt']
+        out['precision%d' % iou] = _ratio(c['tp'], c['tp'] + c['fp'])
+        out['recall%d' % iou] = _ratio(c['tp'], c['gt'])
+    out.update(adds_metrics(tp_adds, list(gt_errors.values())))
+    out['adds_missing'] = missing
+    out['_adds_tp_m'] = tp_adds
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# The other measures
+
+def contact_metrics(evals):
+    """Contact graph precision / recall / F1 from final_map.contacts summed over the files; all
+    null when no file has contacts."""
+    sums, any_contacts = {'true': 0, 'estimated': 0, 'correct': 0}, False
+    for ev in evals:
+        c = (ev.get('final_map') or {}).get('contacts')
+        if c is None:
+            continue
+        any_contacts = True
+        for key in sums:
+            sums[key] += int(c.get(key) or 0)
+    if not any_contacts:
+        return {'contact_true': None, 'contact_estimated': None, 'contact_correct': None,
+                'contact_precision': None, 'contact_recall': None, 'contact_f1': None}
+    precision = _ratio(sums['correct'], sums['estimated'])
+    recall = _ratio(sums['correct'], sums['true'])
+    if precision is None or recall is None:
+        f1 = None
+    else:
+        f1 = 2 * precision * recall / (precision + recall) if precision + recall > 0 else 0.0
+    return {'contact_true': sums['true'], 'contact_estimated': sums['estimated'],
+            'contact_correct': sums['correct'], 'contact_precision': precision,
+            'contact_recall': recall, 'contact_f1': f1}
+
+
+def _pooled(evals, key):
+    values = []
+    for ev in evals:
+        values.extend(float(v) for v in (ev.get('final_map') or {}).get(key) or []
+                      if v is not None)
+    return np.asarray(values, dtype=float)
+
+
+def physics_metrics(evals):
+    """Penetration and floating gap (mm) of the final maps, pooled; 0 for no values."""
+    pen, gap = _pooled(evals, 'penetration_mm'), _pooled(evals, 'gap_mm')
+    return {'penetration_mean_mm': float(pen.mean()) if pen.size else 0.0,
+            'penetration_max_mm': float(pen.max()) if pen.size else 0.0,
+            'float_gap_mean_mm': float(gap.mean()) if gap.size else 0.0,
+            'float_gap_max_mm': float(gap.max()) if gap.size else 0.0,
+            'physics_pairs': int(pen.size)}
+
+
+def _percentile(values, q):
+    return float(np.percentile(values, q)) if len(values) else None
+
+
+def timing_metrics(evals):
+    """Per-keyframe time (total and per stage), real-time factor and peak memory."""
+    def pooled(stage):
+        return np.asarray([float(v) for ev in evals
+                           for v in (ev.get('timings_ms') or {}).get(stage) or []], dtype=float)
+    total = pooled('total')
+    out = {'keyframes': int(total.size),
+           'ms_per_keyframe_p50': _percentile(total, 50),
+           'ms_per_keyframe_p95': _percentile(total, 95),
+           'ms_per_keyframe_max': float(total.max()) if total.size else None}
+    for stage in STAGES:
+        values = pooled(stage)
+        out['ms_%s_p50' % stage] = _percentile(values, 50)
+        out['ms_%s_p95' % stage] = _percentile(values, 95)
+    wall = [ev.get('wall_time_s') for ev in evals]
+    duration = [ev.get('recording_duration_s') for ev in evals]
+    if any(v is None for v in wall + duration):
+        out['wall_time_s'] = out['recording_duration_s'] = out['realtime_factor'] = None
+    else:
+        out['wall_time_s'] = float(sum(wall))
+        out['recording_duration_s'] = float(sum(duration))
+        out['realtime_factor'] = _ratio(out['wall_time_s'], out['recording_duration_s'])
+    rss = [float(ev['peak_rss_mb']) for ev in evals if ev.get('peak_rss_mb') is not None]
+    out['peak_rss_mb'] = max(rss) if rss else None
+    return out
+
+
+def final_map_figures(evals):
+    """Objects in the final maps, matched ones, true ones (summed) and their ADD-S."""
+    fm = [ev.get('final_map') or {} for ev in evals]
+    adds = _pooled(evals, 'adds_m')
+    finite = adds[np.isfinite(adds)]
+    return {'final_objects': sum(int(m.get('objects') or 0) for m in fm),
+            'final_matched': sum(int(m.get('matched') or 0) for m in fm),
+            'final_true_objects': sum(int(m.get('true_objects') or 0) for m in fm),
+            'final_adds_mean_m': float(finite.mean()) if finite.size else None,
+            'final_adds_under_1cm': float(np.mean(adds < 0.01)) if adds.size else None}
+
+
+def method_summary(evals):
+    """Every measure for one method's evaluation files (one or more scenes)."""
+    out = {'method': evals[0]['method'] if evals else None, 'scenes': len(evals)}
+    out.update(coco_metrics(evals))
+    out.update(contact_metrics(evals))
+    out.update(physics_metrics(evals))
+    out.update(timing_metrics(evals))
+    out.update(final_map_figures(evals))
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# Summary, targets, guard
+
+def machine_info():
+    """uname -srm, CPU model and core count."""
+    cpu = None
+    try:
+        with open('/proc/cpuinfo') as f:
+            for line in f:
+                if line.startswith('model name'):
+                    cpu = line.split(':', 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    return {'uname': '%s %s %s' % (platform.system(), platform.release(), platform.machine()),
+            'cpu': cpu or platform.processor() or 'unknown', 'cores': os.cpu_count()}
+
+
+def git_commit():
+    """Short commit of the repository holding this script, or 'unknown'."""
+    try:
+        out = subprocess.run(['git', 'rev-parse', '--short', 'HEAD'], capture_output=True,
+                             text=True, timeout=10,
+                             cwd=os.path.dirname(os.path.abspath(__file__)))
+        return out.stdout.strip() or 'unknown'
+    except (OSError, subprocess.SubprocessError):
+        return 'unknown'
+
+
+def summarize(evals, suite=None, commit=None):
+    """summary.json's content (still with the in-memory '_' keys)."""
+    methods = {name: method_summary(group) for name, group in by_method(evals).items()}
+    scenes = {}
+    for scene in scenes_of(evals):
+        group = by_method([ev for ev in evals if ev['scene'] == scene])
+        scenes[scene] = {name: method_summary(g) for name, g in group.items()}
+    summary = {'suite': suite, 'date': datetime.datetime.now().astimezone()
+               .isoformat(timespec='seconds'),
+               'commit': commit, 'machine': machine_info(), 'methods': methods,
+               'scenes': scenes}
+    summary['targets'] = check_targets(methods)
+    for name, m in methods.items():
+        if name not in summary:
+            summary[name] = m
+    return summary
+
+
+def json_ready(obj):
+    """Plain JSON types; NaN and infinities become null; keys starting with '_' are dropped."""
+    if isinstance(obj, dict):
+        return {str(k): json_ready(v) for k, v in obj.items() if not str(k).startswith('_')}
+    if isinstance(obj, (list, tuple)):
+        return [json_ready(v) for v in obj]
+    if isinstance(obj, (bool, np.bool_)):
+        return bool(obj)
+    if isinstance(obj, (int, np.integer)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        return float(obj) if math.isfinite(obj) else None
+    return obj
+
+
+def _ahead(methods, key):
+    """(ours, best other value, its name) for 'GeoFusion ahead of every other method'."""
+    others = [(m.get(key), name) for name, m in methods.items()
+              if name != OURS and m.get(key) is not None]
+    best = max(others) if others else (None, None)
+    return (methods.get(OURS) or {}).get(key), best[0], best[1]
+
+
+def check_targets(methods):
+    """The suite 'bench' targets: [{'target', 'measured', 'met', 'status'}]."""
+    ours = methods.get(OURS) or {}
+    rows = []
+
+    def add(target, measured, met, missed_by):
+        status = 'met' if met else ('missed by %s' % missed_by if missed_by else 'missed')
+        rows.append({'target': target, 'measured': measured, 'met': bool(met),
+                     'status': status})
+
+    for key, label, fmt, unit in (('map75', 'mAP75', '%.1f', ' points'),
+                                  ('map50_95', 'mAP50:95', '%.1f', ' points'),
+                                  ('precision50', 'precision (IoU 0.5, score 0.5)', '%.3f', '')):
+        value, best, best_name = _ahead(methods, key)
+        target = '%s: %s ahead of every other method' % (label, OURS)
+        if value is None or best is None:
+            add(target, 'n/a', False, 'n/a (%s)' % ('not measured' if value is None
+                                                     else 'no other method'))
+            continue
+        measured = (fmt + ' vs ' + fmt + ' (%s)') % (value, best, best_name)
+        add(target, measured, value > best,
+            (fmt % (best - value)) + unit + (' (tie)' if value == best else ''))
+
+    ours_map, fbf_map = ours.get('map50_95'), (methods.get(BASELINE) or {}).get('map50_95')
+    target = 'mAP50:95: %s >= 1.6 x %s' % (OURS, BASELINE)
+    if ours_map is None or fbf_map is None:
+        add(target, 'n/a', False, 'n/a (not measured)')
+    elif fbf_map <= 0:
+        add(target, '%.1f vs %.1f' % (ours_map, fbf_map), ours_map >= 0, None)
+    else:
+        ratio = ours_map / fbf_map
+        add(target, '%.2f x (%.1f vs %.1f)' % (ratio, ours_map, fbf_map), ratio >= 1.6,
+            '%.2f x' % (1.6 - ratio))
+
+    for key, label, op, bound, fmt, unit in (
+            ('precision50', 'precision (IoU 0.5, score 0.5)', '>=', 0.97, '%.3f', ''),
+            ('adds_under_1cm', 'ADD-S < 1 cm share', '>=', 0.90, '%.3f', ''),
+            ('contact_f1', 'contact F1', '>=', 0.85, '%.3f', ''),
+            ('penetration_mean_mm', 'mean penetration', '<', 2.0, '%.2f', ' mm'),
+            ('ms_per_keyframe_p95', 'time per keyframe, p95', '<', 50.0, '%.1f', ' ms'),
+            ('realtime_factor', 'real-time factor', '<', 0.2, '%.3f', '')):
+        target = '%s: %s %s %s%s' % (label, OURS, op, fmt % bound, unit)
+        value = ours.get(key)
+        if value is None:
+            add(target, 'n/a', False, 'n/a (not measured)')
+            continue
+        met = value >= bound if op == '>=' else value < bound
+        add(target, (fmt % value) + unit, met, (fmt % abs(value - bound)) + unit)
+    return rows
+
+
+def guard(methods):
+    """(passed, message): GeoFusion ahead of FbF on mAP50:95 and precision50."""
+    ours, fbf = methods.get(OURS), methods.get(BASELINE)
+    if ours is None or fbf is None:
+        return False, 'guard: cannot compare, %s missing' % (OURS if ours is None else BASELINE)
+    problems = []
+    for key, label in (('map50_95', 'mAP50:95'), ('precision50', 'precision50')):
+        a, b = ours.get(key), fbf.get(key)
+        if a is None:
+            problems.append('%s of %s not measured' % (label, OURS))
+        elif b is not None and not a > b:
+            problems.append('%s %s %s <= %s %s' % (label, OURS, _num(a, 3), BASELINE, _num(b, 3)))
+    if problems:
+        return False, 'guard failed: ' + '; '.join(problems)
+    return True, 'guard passed: %s ahead of %s on mAP50:95 and precision50' % (OURS, BASELINE)
+
+
+# ---------------------------------------------------------------------------------------------
+# Figures
+
+def adds_curve(tp_adds, x_max=0.02, n=201):
+    """(x in metres, share of true positives with ADD-S < x)."""
+    x = np.linspace(0.0, x_max, n)
+    tp = np.sort(np.asarray(tp_adds, dtype=float))
+    if not tp.size:
+        return x, np.zeros_like(x)
+    return x, np.searchsorted(tp, x, side='left') / tp.size
+
+
+def plot_adds_curve(methods, path):
+    """ADD-S accuracy-threshold curve over [0, 2 cm] for the methods with true positives."""
+    fig, ax = plt.subplots(figsize=(5.5, 4.0))
+    drawn = 0
+    for name, m in methods.items():
+        tp = m.get('_adds_tp_m') or []
+        if not tp:
+            continue
+        x, y = adds_curve(tp)
+        ax.plot(100.0 * x, y, lw=2, label='%s (AUC %.1f, n=%d)' % (name, m['adds_auc_2cm'],
+                                                                   len(tp)))
+        drawn += 1
+    ax.set_xlim(0, 2)
+    ax.set_ylim(0, 1.02)
+    ax.set_xlabel('ADD-S threshold (cm)')
+    ax.set_ylabel('accuracy (share of true positives)')
+    ax.set_title('Pose accuracy of true positives (IoU 0.5, score 0.5)')
+    ax.grid(True, alpha=0.3)
+    if drawn:
+        ax.legend(loc='lower right', fontsize=8, title='AUC over [0, 2 cm]', title_fontsize=8)
+    else:
+        ax.text(1, 0.5, 'no true positives', ha='center')
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def plot_timing(ev, path):
+    """Per-keyframe run time by stage (stacked) of one evaluation file."""
+    t = ev.get('timings_ms') or {}
+    series = [np.asarray(t.get(s) or [], dtype=float) for s in STAGES]
+    n = max([len(s) for s in series] + [len(t.get('total') or [])])
+    series = [np.pad(s, (0, n - len(s))) for s in series]
+    x = np.arange(n)
+    fig, ax = plt.subplots(figsize=(7.0, 3.6))
+    if n:
+        ax.stackplot(x, *series, labels=[s.replace('_', ' ') for s in STAGES], alpha=0.85)
+        total = np.asarray(t.get('total') or [], dtype=float)
+        if total.size:
+            ax.plot(np.arange(total.size), total, color='k', lw=0.8, label='total')
+        ax.set_xlim(0, max(n - 1, 1))
+        top = max(float(np.max(np.sum(series, axis=0))), float(total.max()) if total.size
+                  else 0.0)
+        ax.set_ylim(0, 1.3 * top if top > 0 else 1.0)  # room for the legend
+        ax.legend(loc='upper left', fontsize=7, ncol=6)
+    else:
+        ax.set_ylim(0, 1.0)
+    ax.set_xlabel('keyframe')
+    ax.set_ylabel('time (ms)')
+    ax.set_title('%s on %s: time per keyframe by stage' % (ev['method'], ev['scene']))
+    ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def short_name(class_name):
+    """'003_cracker_box' -> 'cracker_box'."""
+    return re.sub(r'^\d+_', '', str(class_name))
+
+
+def _draw_graph(ax, objects, contacts, title, estimated):
+    """Top view of objects (key -> dict with xy, z, class_name) and their contacts. Table
+    contacts are rings around the object; contacts with an object directly underneath (top-view
+    distance under 1 cm) are diamonds around the upper one; incorrect estimated contacts
+    dashed."""
+    for o in objects.values():
+        x, y = o['xy']
+        unmatched = estimated and o.get('match', 0) < 0
+        ax.plot(x, y, 'x' if unmatched else 'o', color='tab:red' if unmatched else 'k', ms=5,
+                zorder=3)
+    # labels, nudged up for objects close in the top view
+    placed = []
+    for o in sorted(objects.values(), key=lambda o: o.get('z', 0.0)):
+        x, y = o['xy']
+        k = sum(1 for (px, py) in placed if math.hypot(px - x, py - y) < 0.03)
+        placed.append((x, y))
+        ax.annotate(short_name(o.get('class_name', '')), (x, y), xytext=(4, 4 + 8 * k),
+                    textcoords='offset points', fontsize=6)
+    skipped = 0
+    for c in contacts:
+        colour = CONTACT_COLOURS.get(c.get('type'), 'tab:gray')
+        style = '--' if estimated and c.get('correct') is False else '-'
+        a, b = c.get('a'), c.get('b')
+        if a == -1 or b == -1:
+            other = objects.get(b if a == -1 else a)
+            if other is None:
+                skipped += 1
+                continue
+            ax.scatter([other['xy'][0]], [other['xy'][1]], s=220, facecolors='none',
+                       edgecolors=colour, linewidths=1.5, linestyle=style, zorder=2)
+            continue
+        oa, ob = objects.get(a), objects.get(b)
+        if oa is None or ob is None:
+            skipped += 1
+            continue
+        (xa, ya), (xb, yb) = oa['xy'], ob['xy']
+        if math.hypot(xa - xb, ya - yb) < 0.01:
+            upper = oa if oa.get('z', 0.0) >= ob.get('z', 0.0) else ob
+            ax.scatter([upper['xy'][0]], [upper['xy'][1]], s=120, marker='D',
+                       facecolors='none', edgecolors=colour, linewidths=1.5, linestyle=style,
+                       zorder=2)
+        else:
+            ax.plot([xa, xb], [ya, yb], color=colour, ls=style, lw=1.8, zorder=1)
+    ax.set_title(title + (' (%d contacts of unknown objects)' % skipped if skipped else ''),
+                 fontsize=9)
+    ax.set_xlabel('x (m)')
+    ax.set_ylabel('y (m)')
+    ax.grid(True, alpha=0.3)
+
+
+def plot_contact_graph(ev, path):
+    """True and estimated contact graphs (top view) of one evaluation file."""
+    g = ev.get('contact_graph') or {}
+    truth = {o['index']: o for o in g.get('true_objects') or []}
+    est = {o['id']: o for o in g.get('estimated_objects') or []}
+    fig, axes = plt.subplots(1, 2, figsize=(11.0, 5.0))
+    _draw_graph(axes[0], truth, g.get('true_contacts') or [], 'ground truth (%d objects, %d '
+                'contacts)' % (len(truth), len(g.get('true_contacts') or [])), False)
+    _draw_graph(axes[1], est, g.get('estimated_contacts') or [], '%s (%d objects, %d contacts)'
+                % (ev['method'], len(est), len(g.get('estimated_contacts') or [])), True)
+    # the same metric frame in both panels
+    xy = np.asarray([o['xy'] for o in list(truth.values()) + list(est.values())] or [[0, 0]],
+                    dtype=float)
+    centre = (xy.min(axis=0) + xy.max(axis=0)) / 2
+    half = max(float((xy.max(axis=0) - xy.min(axis=0)).max()) / 2 + 0.05, 0.1)
+    for ax in axes:
+        ax.set_xlim(centre[0] - half, centre[0] + half)
+        ax.set_ylim(centre[1] - half, centre[1] + half)
+        ax.set_aspect('equal', adjustable='box')
+    handles = [Line2D([], [], color=c, lw=2, label=t) for t, c in CONTACT_COLOURS.items()]
+    handles += [Line2D([], [], color='k', lw=1.5, ls='--', label='incorrect (estimate)'),
+                Line2D([], [], marker='o', mfc='none', mec='k', ls='', ms=11,
+                       label='on the table'),
+                Line2D([], [], marker='D', mfc='none', mec='k', ls='', ms=8,
+                       label='on the object below'),
+                Line2D([], [], marker='x', color='tab:red', ls='', label='unmatched estimate')]
+    fig.legend(handles=handles, loc='lower center', ncol=len(handles), fontsize=8)
+    fig.suptitle('Contact graph, %s (top view)' % ev['scene'])
+    fig.tight_layout(rect=(0, 0.06, 1, 0.96))
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def write_figures(evals, summary, out_dir, plot_scene):
+    """The three figures; returns {name: file name} of those written."""
+    figures = {}
+    path = os.path.join(out_dir, 'adds_curve.png')
+    plot_adds_curve(summary['methods'], path)
+    figures['adds_curve'] = os.path.basename(path)
+    ours = [ev for ev in evals if ev['method'] == OURS and ev['scene'] == plot_scene]
+    if not ours:
+        print('bench_report: no %s evaluation on %s, no timing and contact graph figures'
+              % (OURS, plot_scene), file=sys.stderr)
+        return figures
+    safe = re.sub(r'[^A-Za-z0-9_.-]', '_', plot_scene)
+    path = os.path.join(out_dir, 'timing_%s.png' % safe)
+    plot_timing(ours[0], path)
+    figures['timing'] = os.path.basename(path)
+    path = os.path.join(out_dir, 'contact_graph_%s.png' % safe)
+    plot_contact_graph(ours[0], path)
+    figures['contact_graph'] = os.path.basename(path)
+    return figures
+
+
+# ---------------------------------------------------------------------------------------------
+# Report
+
+def _num(value, digits=1, unit=''):
+    """A number with the given decimals, 'n/a' for None / NaN."""
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return 'n/a'
+    return ('%.*f' % (digits, value)) + unit
+
+
+def _table(header, rows, numeric=True):
+    """A markdown table; numeric: columns after the first right-aligned."""
+    lines = ['| ' + ' | '.join(header) + ' |',
+             '|' + '|'.join(['---'] + ['---:' if numeric else '---'] * (len(header) - 1))
+             + '|']
+    lines += ['| ' + ' | '.join(str(c) for c in row) + ' |' for row in rows]
+    return lines
+
+
+def write_report(summary, out_dir, figures, command):
+    """report.md from the summary."""
+    methods, scenes = summary['methods'], summary['scenes']
+    machine = summary['machine']
+    n_keyframes = {name: m.get('keyframes') for name, m in methods.items()}
+    md = ['# GeoFusion benchmark report', '',
+          '- date: %s' % summary['date'],
+          '- commit: %s' % summary['commit'],
+          '- machine: %s; %s; %s cores' % (machine['uname'], machine['cpu'], machine['cores']),
+          '- suite: %s (%d scenes: %s)' % (summary['suite'], len(scenes), ', '.join(scenes)),
+          '- made with: `%s`' % command, '',
+          'Pooled over all scenes. Ground truth less than 10 %% visible is ignored (COCO '
+          'crowd). Keyframes evaluated: %s.' % ', '.join('%s %s' % (k, v) for k, v in
+                                                         n_keyframes.items()), '']
+
+    md += ['## Table I: COCO bounding-box mAP (%)', '']
+    rows = [[n, _num(m['map50']), _num(m['map75']), _num(m['map50_95'])]
+            for n, m in methods.items()]
+    rows += [['paper: ' + n, _num(p['map50']), _num(p['map75']), _num(p['map50_95'])]
+             for n, p in PAPER.items()]
+    md += _table(['method', 'mAP50', 'mAP75', 'mAP50:95'], rows) + ['']
+
+    md += ['## Table II: precision / recall at score 0.5', '']
+    rows = [[n, _num(m['precision50'], 3), _num(m['recall50'], 3), _num(m['precision75'], 3),
+             _num(m['recall75'], 3), '%d / %d / %d' % (m['tp50'], m['fp50'], m['gt50'])]
+            for n, m in methods.items()]
+    rows += [['paper: ' + n, _num(p['precision50'], 2), _num(p['recall50'], 2),
+              _num(p['precision75'], 2), _num(p['recall75'], 2), '']
+             for n, p in PAPER.items()]
+    md += _table(['method', 'P (IoU 0.5)', 'R (IoU 0.5)', 'P (IoU 0.75)', 'R (IoU 0.75)',
+                  'TP / FP / GT (IoU 0.5)'], rows) + ['']
+
+    md += ['## Pose accuracy (ADD-S of true positives at IoU 0.5, score 0.5)', '',
+           'AUC: YCB-Video AUC up to 10 cm over every ground-truth instance (missed = '
+           'infinite); AUC 2 cm: area under the curve below, over true positives.', '']
+    rows = [[n, str(m['adds_tp_count']), _num(m['adds_under_1cm'], 3),
+             _num(m['adds_under_2cm'], 3), _num(m['adds_auc']), _num(m['adds_auc_2cm']),
+             _num(None if m['adds_tp_median_m'] is None else 1000 * m['adds_tp_median_m'], 1)]
+            for n, m in methods.items()]
+    md += _table(['method', 'TPs', '< 1 cm', '< 2 cm', 'AUC (10 cm)', 'AUC (2 cm)',
+                  'median (mm)'], rows) + ['']
+    if any(m['adds_missing'] for m in methods.values()):
+        md += ['True positives without an ADD-S value (counted as infinite): %s.' % ', '.join(
+            '%s %d' % (n, m['adds_missing']) for n, m in methods.items()), '']
+    if 'adds_curve' in figures:
+        md += ['![ADD-S accuracy curve](%s)' % figures['adds_curve'], '']
+
+    md += ['## Contact graph (final maps, summed over scenes)', '']
+    rows = [[n, _num(m['contact_precision'], 3), _num(m['contact_recall'], 3),
+             _num(m['contact_f1'], 3),
+             'n/a' if m['contact_true'] is None else '%d / %d / %d' % (
+                 m['contact_correct'], m['contact_estimated'], m['contact_true'])]
+            for n, m in methods.items()]
+    md += _table(['method', 'precision', 'recall', 'F1', 'correct / estimated / true'],
+                 rows) + ['']
+    if 'contact_graph' in figures:
+        md += ['![contact graph](%s)' % figures['contact_graph'], '']
+
+    md += ['## Physical plausibility (final maps)', '']
+    rows = [[n, _num(m['penetration_mean_mm'], 2), _num(m['penetration_max_mm'], 2),
+             _num(m['float_gap_mean_mm'], 2), _num(m['float_gap_max_mm'], 2),
+             str(m['physics_pairs'])] for n, m in methods.items()]
+    md += _table(['method', 'penetration mean (mm)', 'penetration max (mm)', 'gap mean (mm)',
+                  'gap max (mm)', 'values'], rows) + ['']
+    rows = [[n, '%d / %d / %d' % (m['final_objects'], m['final_matched'],
+                                  m['final_true_objects']),
+             _num(None if m['final_adds_mean_m'] is None else 1000 * m['final_adds_mean_m']),
+             _num(m['final_adds_under_1cm'], 3)] for n, m in methods.items()]
+    md += ['Final maps:', ''] + _table(['method', 'objects / matched / true',
+                                        'ADD-S mean (mm)', 'ADD-S < 1 cm'], rows) + ['']
+
+    md += ['## Time', '']
+    rows = [[n, _num(m['ms_per_keyframe_p50']), _num(m['ms_per_keyframe_p95']),
+             _num(m['ms_per_keyframe_max']), _num(m['realtime_factor'], 3),
+             _num(m['peak_rss_mb'], 0)] for n, m in methods.items()]
+    md += _table(['method', 'ms / keyframe p50', 'p95', 'max', 'real-time factor',
+                  'peak memory (MB)'], rows) + ['']
+    rows = [[n] + ['%s / %s' % (_num(m['ms_%s_p50' % s]), _num(m['ms_%s_p95' % s]))
+                   for s in STAGES] for n, m in methods.items()]
+    md += ['Per stage, ms per keyframe (p50 / p95):', '']
+    md += _table(['method'] + [s.replace('_', ' ') for s in STAGES], rows) + ['']
+    if 'timing' in figures:
+        md += ['![time per keyframe](%s)' % figures['timing'], '']
+
+    md += ['## Per scene', '']
+    names = list(methods)
+    for key, label, digits in (('map50_95', 'mAP50:95 (%)', 1),
+                               ('precision50', 'precision (IoU 0.5, score 0.5)', 3),
+                               ('recall50', 'recall (IoU 0.5, score 0.5)', 3),
+                               ('adds_under_1cm', 'ADD-S < 1 cm share', 3),
+                               ('contact_f1', 'contact F1', 3)):
+        rows = [[s] + [_num((scenes[s].get(n) or {}).get(key), digits) if n in scenes[s]
+                       else '-' for n in names] for s in scenes]
+        md += ['### %s' % label, ''] + _table(['scene'] + names, rows) + ['']
+
+    md += ['## Targets', '',
+           'Set for the suite "bench"; printed for every suite (this one: %s).' % summary['suite'],
+           '']
+    rows = [[t['target'], t['measured'], t['status']] for t in summary['targets']]
+    md += _table(['target', 'measured', 'result'], rows, numeric=False) + ['']
+    met = sum(t['met'] for t in summary['targets'])
+    md += ['%d of %d targets met.' % (met, len(summary['targets'])), '']
+
+    path = os.path.join(out_dir, 'report.md')
+    with open(path, 'w') as f:
+        f.write('\n'.join(md).rstrip('\n') + '\n')
+    return path
+
+
+def print_table(summary, file=None):
+    """A short table of the pooled figures (to stdout by default)."""
+    file = file or sys.stdout
+    header = ('%-10s %6s %6s %8s %6s %6s %7s %7s %7s %6s'
+              % ('method', 'mAP50', 'mAP75', 'mAP50:95', 'P50', 'R50', 'ADD-S1', 'cF1',
+                 'p95 ms', 'RTF'))
+    print('%s (%d scenes)' % (summary['suite'], len(summary['scenes'])), file=file)
+    print(header, file=file)
+    for name, m in summary['methods'].items():
+        print('%-10s %6s %6s %8s %6s %6s %7s %7s %7s %6s'
+              % (name, _num(m['map50']), _num(m['map75']), _num(m['map50_95']),
+                 _num(m['precision50'], 3), _num(m['recall50'], 3),
+                 _num(m['adds_under_1cm'], 3), _num(m['contact_f1'], 3),
+                 _num(m['ms_per_keyframe_p95']), _num(m['realtime_factor'], 3)), file=file)
+
+
+# ---------------------------------------------------------------------------------------------
+
+def main(argv=None):
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser.add_argument('--eval-dir', required=True,
+                        help='directory with <scene>/<method>.json evaluation files')
+    parser.add_argument('--out', required=True, help='output directory (made if missing)')
+    parser.add_argument('--suite', help='suite name (default: the evaluation directory name)')
+    parser.add_argument('--commit', help='commit measured (default: git rev-parse here)')
+    parser.add_argument('--plot-scene', help='scene of the timing and contact graph figures '
+                        '(default: the first)')
+    parser.add_argument('--guard', action='store_true',
+                        help='exit 1 unless GeoFusion is ahead of FbF on mAP50:95 and '
+                        'precision50')
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as e:  # bad arguments: 2 (--help: 0), also when called as a function
+        return e.code
+    if not os.path.isdir(args.eval_dir):
+        print('bench_report: no directory %s' % args.eval_dir, file=sys.stderr)
+        return 2
+    try:
+        evals = load_evals(args.eval_dir)
+    except EvalError as e:
+        print('bench_report: %s' % e, file=sys.stderr)
+        return 2
+    if not evals:
+        print('bench_report: no evaluation files in %s/<scene>/*.json' % args.eval_dir,
+              file=sys.stderr)
+        return 2
+    scenes = scenes_of(evals)
+    plot_scene = args.plot_scene or scenes[0]
+    if plot_scene not in scenes:
+        print('bench_report: --plot-scene %s is none of %s' % (plot_scene, ', '.join(scenes)),
+              file=sys.stderr)
+        return 2
+    suite = args.suite or os.path.basename(os.path.normpath(args.eval_dir))
+    commit = args.commit or git_commit()
+    try:
+        summary = summarize(evals, suite, commit)
+    except (EvalError, KeyError, TypeError, ValueError) as e:
+        print('bench_report: cannot evaluate: %s: %s' % (type(e).__name__, e), file=sys.stderr)
+        return 2
+    os.makedirs(args.out, exist_ok=True)
+    with open(os.path.join(args.out, 'summary.json'), 'w') as f:
+        json.dump(json_ready(summary), f, indent=1, allow_nan=False)
+    figures = write_figures(evals, summary, args.out, plot_scene)
+    command = 'bench_report.py ' + shlex.join(argv)
+    write_report(summary, args.out, figures, command)
+    print_table(summary)
+    print('written: %s' % os.path.join(args.out, 'report.md'))
+    if args.guard:
+        passed, message = guard(summary['methods'])
+        print(message, file=sys.stdout if passed else sys.stderr)
+        return 0 if passed else 1
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

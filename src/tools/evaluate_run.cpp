@@ -1,0 +1,117 @@
+// Evaluates one or more run_offline results files against the recording's ground truth: prints
+// a short summary of each (objects found and true, pose error, contacts, interpenetration, time)
+// and, with --json, writes the benchmark's evaluation file (docs/BENCHMARK.md) that
+// bench_report.py turns into COCO mAP, precision and recall, ADD-S curves and the report.
+//
+//   evaluate_run --ground-truth SCENE_gt.yaml --results RESULTS.yaml [--json OUT.json]
+//       [--model-set primitives|ycb_video|FILE.yaml] [--models DIR] [--quiet]
+//
+// The model set defaults to the one the ground truth names. Exit code 0, 1 when a file cannot be
+// read or nothing can be compared, 2 for bad arguments.
+#include "command_line.h"
+#include "geofusion/core/dataset.h"
+#include "geofusion/core/run_evaluation.h"
+#include "geofusion/core/run_results.h"
+#include "model_set_option.h"
+
+#include <cstdio>
+#include <iostream>
+#include <string>
+
+namespace {
+
+struct Options {
+  std::string ground_truth, results, json, model_set, models_dir;
+  bool quiet = false;
+};
+
+void usage() {
+  std::cerr << "usage: evaluate_run --ground-truth SCENE_gt.yaml --results RESULTS.yaml\n"
+               "         [--json OUT.json] [--model-set primitives|ycb_video|FILE.yaml]\n"
+               "         [--models DIR] [--quiet]\n";
+}
+
+Options parse(int argc, char** argv) {
+  Options o;
+  geofusion::CommandLine args(argc, argv);
+  std::string a;
+  while (args.next(&a)) {
+    if (a == "--ground-truth")
+      o.ground_truth = args.value();
+    else if (a == "--results")
+      o.results = args.value();
+    else if (a == "--json")
+      o.json = args.value();
+    else if (a == "--model-set")
+      o.model_set = args.value();
+    else if (a == "--models")
+      o.models_dir = args.value();
+    else if (a == "--quiet")
+      o.quiet = true;
+    else if (a == "-h" || a == "--help") {
+      usage();
+      std::exit(0);
+    } else
+      throw std::runtime_error("unknown option " + a);
+  }
+  if (o.ground_truth.empty() || o.results.empty()) {
+    throw std::runtime_error("--ground-truth and --results are required");
+  }
+  return o;
+}
+
+// The model set a ground-truth file names, from its header line (the file is read again with
+// the models for its classes).
+std::string modelSetOf(const std::string& gt_path) {
+  std::FILE* f = std::fopen(gt_path.c_str(), "r");
+  if (!f) return "primitives";
+  char line[512];
+  std::string set = "primitives";
+  while (std::fgets(line, sizeof(line), f)) {
+    const std::string s(line);
+    if (s.rfind("model_set:", 0) == 0) {
+      set = s.substr(10);
+      set.erase(0, set.find_first_not_of(" \"'"));
+      set.erase(set.find_last_not_of(" \"'\r\n") + 1);
+      break;
+    }
+  }
+  std::fclose(f);
+  return set;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace geofusion;
+  Options opt;
+  try {
+    opt = parse(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "evaluate_run: " << e.what() << "\n";
+    usage();
+    return 2;
+  }
+  const std::string set = opt.model_set.empty() ? modelSetOf(opt.ground_truth) : opt.model_set;
+  ModelSet models;
+  if (!loadModelSetOption("evaluate_run", set, opt.models_dir, &models)) return 1;
+  GroundTruth gt;
+  RunResults results;
+  std::string error;
+  if (!readGroundTruth(opt.ground_truth, models, &gt, &error) ||
+      !readRunResults(opt.results, models, &results, &error)) {
+    std::cerr << "evaluate_run: " << error << "\n";
+    return 1;
+  }
+  RunEvaluation evaluation;
+  if (!evaluateRun(gt, results, EvaluationConfig(), &evaluation, &error)) {
+    std::cerr << "evaluate_run: " << opt.results << ": " << error << "\n";
+    return 1;
+  }
+  if (!opt.json.empty() && !writeEvaluationJson(opt.json, evaluation, &error)) {
+    std::cerr << "evaluate_run: " << error << "\n";
+    return 1;
+  }
+  if (!opt.quiet) std::cout << summarize(evaluation);
+  return 0;
+}

@@ -1,0 +1,39 @@
+// The tools' --model-set / --models options: "ycb_video" names the package's YCB-Video model set
+// (config/models/ycb_video.yaml) whose meshes come from --models, else $GEOFUSION_YCB_DIR, else
+// ../shared/data/ycb_video beside the package source. Tools define GEOFUSION_SOURCE_DIR.
+#pragma once
+
+#include "geofusion/ros/estimator_pipeline.h"
+
+#include <cstdlib>
+#include <iostream>
+#include <string>
+#include <vector>
+
+namespace geofusion {
+
+/// The default YCB-Video models folder.
+inline std::string defaultYcbDir() {
+  const char* env = std::getenv("GEOFUSION_YCB_DIR");
+  return env ? std::string(env) : std::string(GEOFUSION_SOURCE_DIR) + "/../shared/data/ycb_video";
+}
+
+/// Loads the model set of a --model-set value (primitives, ycb_video or a YAML file), saying what
+/// went wrong on stderr under the tool's name.
+inline bool loadModelSetOption(const std::string& tool, std::string spec, std::string dir,
+                               ModelSet* models) {
+  if (spec == "ycb_video") {
+    spec = std::string(GEOFUSION_SOURCE_DIR) + "/config/models/ycb_video.yaml";
+    if (dir.empty()) dir = defaultYcbDir();
+  }
+  std::vector<std::string> errors;
+  if (!loadModelSet(spec, dir, models, &errors)) {
+    std::cerr << tool << ": cannot load the model set " << spec << "\n";
+    for (const auto& e : errors) std::cerr << "  " << e << "\n";
+    return false;
+  }
+  for (const auto& e : errors) std::cerr << tool << ": warning: " << e << "\n";
+  return true;
+}
+
+}  // namespace geofusion
