@@ -15,8 +15,7 @@ say "running GeoFusion on $out/demo_01.bag (run_offline)"
 "$bin/run_offline" --bag "$out/demo_01.bag" --out "$out/demo_01_geofusion.yaml" --method geofusion \
   --background "$out/demo_01_background.bt"
 say "what it found against the ground truth:"
-/usr/bin/python3 "$GEOFUSION_SRC/src/tools/evaluate_run.py" --results "$out/demo_01_geofusion.yaml" \
-  --ground-truth "$out/demo_01_gt.yaml"
+"$bin/evaluate_run" --results "$out/demo_01_geofusion.yaml" --ground-truth "$out/demo_01_gt.yaml"
 say "the map (objects, contacts, trajectory, timings): $out/demo_01_geofusion.yaml"
 say "the static background (OctoMap, objects removed): $out/demo_01_background.bt"
 say "frames of the recording as PNG: $out/previews/"

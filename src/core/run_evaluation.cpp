@@ -44,6 +44,15 @@ Box2d projectedBox(const std::vector<Eigen::Vector3f>& points, const Eigen::Isom
   return b.empty() ? Box2d() : b;
 }
 
+double boxIou(const Box2d& a, const Box2d& b) {
+  if (a.empty() || b.empty()) return 0.0;
+  const double w = std::min(a.x1, b.x1) - std::max(a.x0, b.x0);
+  const double h = std::min(a.y1, b.y1) - std::max(a.y0, b.y0);
+  if (w <= 0 || h <= 0) return 0.0;
+  const double inter = w * h;
+  return inter / (a.width() * a.height() + b.width() * b.height() - inter);
+}
+
 namespace {
 
 // A plane n . x = h.
@@ -172,7 +181,8 @@ bool evaluateRun(const GroundTruth& gt, const RunResults& results, const Evaluat
       d.object_id = o.id;
       for (std::size_t g = first_truth; g < ev.ground_truth.size(); ++g) {
         const GroundTruthBox& t = ev.ground_truth[g];
-        if (t.crowd || t.class_id != d.class_id) continue;
+        if (t.crowd || t.class_id != d.class_id || boxIou(t.box, d.box) < config.adds_min_iou)
+          continue;
         d.adds_m.emplace_back(t.id, adds(o.model->points, T, truth_poses[g - first_truth]));
       }
       ev.detections.push_back(std::move(d));
@@ -298,10 +308,6 @@ namespace {
 
 nlohmann::json boxJson(const Box2d& b) {
   return nlohmann::json::array({b.x0, b.y0, b.width(), b.height()});
-}
-
-nlohmann::json xyz(const Eigen::Vector3d& p) {
-  return {p.x(), p.y(), p.z()};
 }
 
 double mean(const std::vector<double>& v) {

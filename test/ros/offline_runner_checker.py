@@ -6,6 +6,7 @@ A plain unittest, no ROS master (the workspace's setup.bash must be sourced):
 
     python3 test/ros/offline_runner_checker.py
 """
+import json
 import math
 import os
 import shutil
@@ -100,28 +101,51 @@ class OfflineRunnerTest(unittest.TestCase):
         # Fewer objects than B-SLAM, which keeps every stray detection.
         self.assertLess(len(final), len(self.results['bslam'][2]['final_map']['objects']))
 
-    def test_evaluate_run_summarises_against_the_truth(self):
-        script = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', 'src',
-                              'tools', 'evaluate_run.py')
-        gt = os.path.join(self.dir, 'demo_01_gt.yaml')
-        p = subprocess.run(['/usr/bin/python3', script, '--results',
-                            os.path.join(self.dir, 'geofusion.yaml'), '--ground-truth', gt],
+    def evaluate(self, method):
+        """evaluate_run on a method's results: (return code, output, evaluation JSON or None)."""
+        out = os.path.join(self.dir, method + '.json')
+        p = subprocess.run([util.find_tool('evaluate_run'), '--ground-truth',
+                            os.path.join(self.dir, 'demo_01_gt.yaml'), '--results',
+                            os.path.join(self.dir, method + '.yaml'), '--json', out],
                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True)
-        self.assertEqual(p.returncode, 0, p.stderr)
-        self.assertIn('0 false', p.stdout)
-        sys.path.insert(0, os.path.dirname(script))
-        import evaluate_run  # noqa: E402
-        geo = evaluate_run.summarize(self.results['geofusion'][2], self.gt)
-        bslam = evaluate_run.summarize(self.results['bslam'][2], self.gt)
-        self.assertGreaterEqual(geo['objects_found'], geo['objects_seen'] - 1)
-        self.assertEqual(geo['false_objects'], 0)
-        self.assertGreater(bslam['false_objects'], 0)
-        self.assertLess(geo['position_error_mm'], 10.0)
-        self.assertGreater(geo['contacts_correct'], 0)
-        self.assertGreaterEqual(geo['contacts_correct'], 0.7 * geo['contacts_found'])
-        p = subprocess.run(['/usr/bin/python3', script, '--results', '/nonexistent.yaml',
-                            '--ground-truth', gt], stdout=subprocess.PIPE,
-                           stderr=subprocess.PIPE, universal_newlines=True)
+        data = None
+        if p.returncode == 0:
+            with open(out) as f:
+                data = json.load(f)
+        return p.returncode, p.stdout + p.stderr, data
+
+    def test_evaluate_run_against_the_truth(self):
+        rc, out, geo = self.evaluate('geofusion')
+        self.assertEqual(rc, 0, out)
+        self.assertIn('0 false', out)
+        self.assertEqual(geo['format'], 'geofusion_evaluation_v1')
+        self.assertEqual(len(geo['images']), KEYFRAMES)
+        fm = geo['final_map']
+        seen = {t for f in self.gt['frames'] if f['keyframe'] for t in f['detection_truth']
+                if t >= 0}
+        self.assertGreaterEqual(fm['matched'], len(seen) - 1)
+        self.assertEqual(fm['matched'], fm['objects'])
+        self.assertLess(max(fm['adds_m']), 0.01)
+        self.assertLess(fm['alignment_rmse_m'], 0.02)
+        c = fm['contacts']
+        self.assertGreater(c['correct'], 0)
+        self.assertGreaterEqual(c['correct'], 0.7 * c['estimated'])
+        self.assertLess(max(fm['penetration_mm'] + [0]), 2.0)
+        # Every keyframe's estimates as boxes, and most have a near-zero ADD-S to their object.
+        self.assertGreater(len(geo['detections']), KEYFRAMES)
+        adds = [min(d['adds_m'].values()) for d in geo['detections'] if d['adds_m']]
+        self.assertGreater(sum(a < 0.01 for a in adds), 0.8 * len(adds))
+        rc, out, bslam = self.evaluate('bslam')
+        self.assertEqual(rc, 0, out)
+        self.assertGreater(bslam['final_map']['objects'] - bslam['final_map']['matched'], 0)
+        self.assertIsNone(bslam['final_map']['contacts'])
+        p = subprocess.run([util.find_tool('evaluate_run'), '--results', '/nonexistent.yaml',
+                            '--ground-truth', os.path.join(self.dir, 'demo_01_gt.yaml')],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True)
+        self.assertEqual(p.returncode, 1)
+        self.assertIn('nonexistent', p.stderr)
+        p = subprocess.run([util.find_tool('evaluate_run'), '--results'],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True)
         self.assertEqual(p.returncode, 2)
 
     def test_bad_requests_are_refused(self):

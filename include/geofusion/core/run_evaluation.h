@@ -27,6 +27,9 @@ struct Box2d {
   bool empty() const { return !(x1 > x0 && y1 > y0); }
 };
 
+/// Intersection over union of two boxes (COCO's, no +1 on widths); 0 when either is empty.
+double boxIou(const Box2d& a, const Box2d& b);
+
 /// The box of the model points posed in the camera frame, projected with K and clipped to the
 /// image (bop_toolkit's calc_2d_bbox). Points less than 1 cm in front of the camera are left
 /// out; empty when none is left or the box misses the image.
@@ -40,6 +43,10 @@ struct EvaluationConfig {
   double match_max_adds_m = 0.05;
   /// Object pairs (and objects and the table) closer than this count as touching.
   double touch_distance_m = 0.001;
+  /// ADD-S of an estimate is computed against ground truth whose box overlaps its box at least
+  /// this much: the report takes ADD-S of true positives at IoU 0.5 only (kept a little lower so
+  /// that rounding never loses a pair).
+  double adds_min_iou = 0.45;
   /// Results keyframes find their ground-truth frame by stamp within this.
   double stamp_tolerance_s = 0.005;
 };
@@ -61,7 +68,8 @@ struct DetectionBox {
   Box2d box;
   double score = 0.0;
   int object_id = -1;  ///< the method's object id
-  /// ADD-S (m) against each same-class, not ignored ground truth box of the image: (id, value).
+  /// ADD-S (m) against each same-class, not ignored ground truth box of the image that its box
+  /// overlaps at adds_min_iou or more: (ground truth id, value).
   std::vector<std::pair<int, double>> adds_m;
 };
 
