@@ -170,9 +170,23 @@ visualization_msgs::MarkerArray mapMarkers(const KeyframeResult& r, const Suppor
   Eigen::Isometry3d T_plane = Eigen::Isometry3d::Identity();
   const auto plane_model = plane.valid ? supportPlaneModel(plane, &T_plane) : nullptr;
   int contact_id = 0;
+  Marker links;
+  links.header = header;
+  links.ns = kContactLinkNs;
+  links.id = 0;
+  links.type = Marker::LINE_LIST;
+  links.action = Marker::ADD;
+  links.pose.orientation.w = 1.0;
+  links.scale.x = 0.004;
   for (const FeatureContact& c : r.contacts) {
     Eigen::Vector3d a, b;
     if (!contactPoints(r, c, plane_model.get(), T_plane, &a, &b)) continue;
+    // P2P magenta, P2C green, C2C cyan.
+    std_msgs::ColorRGBA colour;
+    colour.r = c.type == ContactType::kPlanePlane ? 1.0f : 0.1f;
+    colour.g = c.type == ContactType::kPlanePlane ? 0.1f : 1.0f;
+    colour.b = c.type == ContactType::kPlaneCurve ? 0.1f : 1.0f;
+    colour.a = 1.0f;
     Marker arrow;
     arrow.header = header;
     arrow.ns = kContactNs;
@@ -180,18 +194,26 @@ visualization_msgs::MarkerArray mapMarkers(const KeyframeResult& r, const Suppor
     arrow.type = Marker::ARROW;
     arrow.action = Marker::ADD;
     arrow.pose.orientation.w = 1.0;
-    // A short arrow along the contact normal (the support direction for support contacts),
-    // ending at the supported feature: it sits where the objects touch.
-    (void)a;
-    arrow.points = {point(b - 0.05 * c.normal), point(b)};
-    arrow.scale.x = 0.005, arrow.scale.y = 0.012, arrow.scale.z = 0.015;
-    // P2P magenta, P2C green, C2C cyan.
-    arrow.color.r = c.type == ContactType::kPlanePlane ? 1.0f : 0.1f;
-    arrow.color.g = c.type == ContactType::kPlanePlane ? 0.1f : 1.0f;
-    arrow.color.b = c.type == ContactType::kPlaneCurve ? 0.1f : 1.0f;
-    arrow.color.a = 1.0f;
+    // An arrow along the contact normal (the support direction for support contacts), ending
+    // at the supported feature: it sits where the objects touch and points up into what rests.
+    arrow.points = {point(b - 0.06 * c.normal), point(b)};
+    arrow.scale.x = 0.008, arrow.scale.y = 0.018, arrow.scale.z = 0.02;
+    arrow.color = colour;
     out.markers.push_back(arrow);
+    // The link between the two objects' centres: which rests on which, at a glance.
+    // (contactPoints checked the indices; -1 is the support plane.)
+    auto centre = [&](int index, const Eigen::Vector3d& on_plane) {
+      return index < 0 ? on_plane
+                       : Eigen::Vector3d(
+                             r.objects[static_cast<std::size_t>(index)].T_map_obj.translation());
+    };
+    const Eigen::Vector3d from = centre(c.object_a, b), to = centre(c.object_b, a);
+    links.points.push_back(point(from));
+    links.points.push_back(point(to));
+    links.colors.push_back(colour);
+    links.colors.push_back(colour);
   }
+  if (!links.points.empty()) out.markers.push_back(links);
   if (plane_model) {
     Marker table;
     table.header = header;

@@ -293,6 +293,7 @@ bool SceneEstimatorNode::save(const std::string& prefix, std::string* message,
                                                                   : KeyframeResult();
     results.trajectory = pipeline_->estimator().trajectory();
     results.trajectory_stamps = pipeline_->estimator().keyframeStamps();
+    results.support_plane = pipeline_->estimator().supportPlane();
   }
   const std::string path = prefix + ".yaml";
   std::string error;

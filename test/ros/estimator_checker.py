@@ -112,6 +112,15 @@ class EstimatorReplayTest(unittest.TestCase):
         self.assertEqual(len([m for m in last.markers if m.ns == 'labels']), len(final.objects))
         self.assertEqual(len([m for m in last.markers if m.ns == 'contacts']),
                          len(final.contacts))
+        # ... and one line from supporter to supported object a contact, ending at an object.
+        links = [m for m in last.markers if m.ns == 'contact_links']
+        self.assertEqual(len(links), 1)
+        self.assertEqual(links[0].type, Marker.LINE_LIST)
+        self.assertEqual(len(links[0].points), 2 * len(final.contacts))
+        centres = [(o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z)
+                   for o in final.objects]
+        for end in links[0].points[1::2]:
+            self.assertLess(min(math.dist((end.x, end.y, end.z), c) for c in centres), 1e-3)
         # map -> odom is on TF (no timeout in ROS time: the clock stopped with the bag).
         self.assertTrue(self.tf_buffer.can_transform('map', 'odom', rospy.Time(0)),
                         'no map -> odom on TF')

@@ -16,6 +16,9 @@ namespace geofusion {
 constexpr const char* kObjectNs = "objects";      ///< the object: mesh, cube or cylinder
 constexpr const char* kObjectLabelNs = "labels";  ///< TEXT "id class score"
 constexpr const char* kContactNs = "contacts";    ///< ARROW supporter -> supported feature
+/// One LINE_LIST: each contact as a line from the supporter's centre (the point under the
+/// supported feature for the table) to the supported object's centre, coloured by type.
+constexpr const char* kContactLinkNs = "contact_links";
 constexpr const char* kSupportPlaneNs = "support_plane";
 
 /// Map ids in messages: object id + 1 (0 is the support plane, ContactRelation::SUPPORT_PLANE_ID).
