@@ -356,24 +356,33 @@ struct HullCollider::Impl {
 HullCollider::HullCollider() : impl_(std::make_unique<Impl>()) {}
 HullCollider::~HullCollider() = default;
 
+namespace {
+
+// `query` (penetration or distance) of the two models' hulls at their poses; 0 for a null model.
+template <typename Impl, typename Query>
+double onHulls(Impl* impl, const std::shared_ptr<const ObjectModel>& a,
+               const Eigen::Isometry3d& T_world_a, const std::shared_ptr<const ObjectModel>& b,
+               const Eigen::Isometry3d& T_world_b, Query query) {
+  if (!a || !b) return 0.0;
+  fcl::CollisionObjectd oa(impl->hull(a), fcl::Transform3d(T_world_a.matrix()));
+  fcl::CollisionObjectd ob(impl->hull(b), fcl::Transform3d(T_world_b.matrix()));
+  return query(&oa, &ob);
+}
+
+}  // namespace
+
 double HullCollider::penetration(const std::shared_ptr<const ObjectModel>& a,
                                  const Eigen::Isometry3d& T_world_a,
                                  const std::shared_ptr<const ObjectModel>& b,
                                  const Eigen::Isometry3d& T_world_b) {
-  if (!a || !b) return 0.0;
-  fcl::CollisionObjectd oa(impl_->hull(a), fcl::Transform3d(T_world_a.matrix()));
-  fcl::CollisionObjectd ob(impl_->hull(b), fcl::Transform3d(T_world_b.matrix()));
-  return geofusion::penetration(&oa, &ob);
+  return onHulls(impl_.get(), a, T_world_a, b, T_world_b, geofusion::penetration);
 }
 
 double HullCollider::distance(const std::shared_ptr<const ObjectModel>& a,
                               const Eigen::Isometry3d& T_world_a,
                               const std::shared_ptr<const ObjectModel>& b,
                               const Eigen::Isometry3d& T_world_b) {
-  if (!a || !b) return 0.0;
-  fcl::CollisionObjectd oa(impl_->hull(a), fcl::Transform3d(T_world_a.matrix()));
-  fcl::CollisionObjectd ob(impl_->hull(b), fcl::Transform3d(T_world_b.matrix()));
-  return geofusion::distance(&oa, &ob);
+  return onHulls(impl_.get(), a, T_world_a, b, T_world_b, geofusion::distance);
 }
 
 }  // namespace geofusion

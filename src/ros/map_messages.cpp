@@ -93,8 +93,9 @@ geofusion::ObjectMap toObjectMapMsg(const KeyframeResult& r, const SupportPlane&
               : c.type == ContactType::kPlaneCurve ? geofusion::ContactRelation::PLANE_CURVE
                                                    : geofusion::ContactRelation::CURVE_CURVE;
     auto id = [&](int index) {
-      return index < 0 ? geofusion::ContactRelation::SUPPORT_PLANE_ID
-                       : messageId(r.objects[static_cast<std::size_t>(index)].id);
+      return index < 0
+                 ? static_cast<decltype(messageId(0))>(geofusion::ContactRelation::SUPPORT_PLANE_ID)
+                 : messageId(r.objects[static_cast<std::size_t>(index)].id);
     };
     cr.object_a = id(c.object_a);
     cr.object_b = id(c.object_b);
