@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <sstream>
 
 namespace geofusion {
 
@@ -183,6 +184,13 @@ bool BackgroundMap::writeBinary(const std::string& path, std::string* error) con
         return copy.writeBinary(tmp);
       },
       error);
+}
+
+std::string BackgroundMap::binaryData() const {
+  std::ostringstream out(std::ios::binary);
+  octomap::OcTree copy(impl_->tree);  // writeBinaryData prunes: keep ours as it is
+  copy.writeBinaryData(out);
+  return out.str();
 }
 
 }  // namespace geofusion

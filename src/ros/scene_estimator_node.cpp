@@ -11,6 +11,11 @@
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <visualization_msgs/MarkerArray.h>
+#ifdef GEOFUSION_HAVE_OCTOMAP_MSGS
+#include <octomap_msgs/Octomap.h>
+#endif
+
+#include <cmath>
 
 namespace geofusion {
 
@@ -67,6 +72,10 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   background_markers_pub_ =
       pnh_.advertise<visualization_msgs::MarkerArray>("background_markers", 1, true);
   background_cloud_pub_ = pnh_.advertise<sensor_msgs::PointCloud2>("background_cloud", 1, true);
+#ifdef GEOFUSION_HAVE_OCTOMAP_MSGS
+  // Built against octomap_msgs: the tree itself, for octomap_rviz_plugins and OctoMap tools.
+  background_octomap_pub_ = pnh_.advertise<octomap_msgs::Octomap>("background_octomap", 1, true);
+#endif
   save_srv_ = pnh_.advertiseService("save_map", &SceneEstimatorNode::onSave, this);
   reset_srv_ = pnh_.advertiseService("reset", &SceneEstimatorNode::onReset, this);
 
@@ -99,6 +108,18 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   diagnostics_timer_ = pnh_.createWallTimer(
       ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { diagnostics_.force_update(); });
 
+  pnh_.param<std::string>("odom_topic", odom_topic_, "");
+  if (!odom_topic_.empty()) {
+    ros::NodeHandle odom_nh(nh_);
+    odom_nh.setCallbackQueue(&odom_queue_);
+    odom_sub_ = odom_nh.subscribe(odom_topic_, 200, &SceneEstimatorNode::onOdometry, this);
+    odom_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &odom_queue_);
+    odom_spinner_->start();
+    ROS_INFO_STREAM("geofusion: odometry from " << odom_sub_.getTopic()
+                                                << " (nav_msgs/Odometry) instead of TF's "
+                                                << odom_frame_ << " -> base");
+  }
+
   const RgbdDetectionSubscriber::Config sub =
       RgbdDetectionSubscriber::configFromParams(pnh_, warn_period_s_);
   subscriber_ = std::make_unique<RgbdDetectionSubscriber>(
@@ -114,6 +135,8 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
 
 SceneEstimatorNode::~SceneEstimatorNode() {
   subscriber_.reset();
+  if (odom_spinner_) odom_spinner_->stop();
+  odom_sub_.shutdown();
   if (!save_on_shutdown_.empty()) {
     std::string message;
     std::vector<std::string> files;
@@ -199,14 +222,28 @@ void SceneEstimatorNode::publish(const KeyframeResult& result, const std_msgs::H
 void SceneEstimatorNode::publishBackground(const std_msgs::Header& header) {
   std::vector<Eigen::Vector3d> centres;
   double resolution = 0.0;
+  std::string octree;  // binary serialisation, only with octomap_msgs
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!pipeline_->background()) return;
     centres = pipeline_->background()->occupiedCentres();
     resolution = pipeline_->background()->config().resolution_m;
+    if (background_octomap_pub_ && background_octomap_pub_.getNumSubscribers() > 0)
+      octree = pipeline_->background()->binaryData();
   }
   background_markers_pub_.publish(backgroundMarkers(centres, resolution, header));
   background_cloud_pub_.publish(pointCloud(centres, header));
+#ifdef GEOFUSION_HAVE_OCTOMAP_MSGS
+  if (!octree.empty()) {
+    octomap_msgs::Octomap msg;  // what octomap_msgs::binaryMapToMsg fills
+    msg.header = header;
+    msg.binary = true;
+    msg.id = "OcTree";
+    msg.resolution = resolution;
+    msg.data.assign(octree.begin(), octree.end());
+    background_octomap_pub_.publish(msg);
+  }
+#endif
 }
 
 void SceneEstimatorNode::broadcastCorrection(const ros::Time& stamp) {
@@ -270,6 +307,46 @@ void SceneEstimatorNode::onReconfigure(geofusion::SceneEstimatorConfig& config, 
   c.stage_two.prior_sigma_position_m = config.prior_sigma_position_m;
   pipeline_->estimator().setConfig(c);
   tf_timeout_s_ = config.tf_timeout_s;
+}
+
+void SceneEstimatorNode::onOdometry(const nav_msgs::OdometryConstPtr& msg) {
+  const geometry_msgs::Pose& p = msg->pose.pose;
+  const Eigen::Quaterniond q(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
+  const bool finite = std::isfinite(p.position.x) && std::isfinite(p.position.y) &&
+                      std::isfinite(p.position.z) && q.coeffs().allFinite();
+  if (!finite || std::abs(q.norm() - 1.0) > 1e-2) {
+    ROS_WARN_STREAM_THROTTLE(warn_period_s_, "geofusion: odometry on "
+                                                 << odom_sub_.getTopic()
+                                                 << " with a non-finite position or a "
+                                                    "non-unit quaternion ignored");
+    return;
+  }
+  if (msg->header.frame_id != odom_frame_ || msg->child_frame_id.empty()) {
+    ROS_WARN_STREAM_THROTTLE(warn_period_s_, "geofusion: odometry on "
+                                                 << odom_sub_.getTopic() << " is in frame '"
+                                                 << msg->header.frame_id << "' -> '"
+                                                 << msg->child_frame_id << "', expected '"
+                                                 << odom_frame_ << "' -> the robot base; ignored");
+    return;
+  }
+  if (!last_odom_stamp_.isZero() && msg->header.stamp + ros::Duration(0.5) < last_odom_stamp_) {
+    // A looping bag: older odometry would be refused by the buffer as data from the past.
+    ROS_WARN_STREAM_THROTTLE(warn_period_s_, "geofusion: odometry time jumped back from "
+                                                 << last_odom_stamp_ << " to " << msg->header.stamp
+                                                 << ": TF buffer cleared");
+    tf_buffer_.clear();
+  }
+  last_odom_stamp_ = msg->header.stamp;
+  geometry_msgs::TransformStamped t;
+  t.header = msg->header;
+  t.child_frame_id = msg->child_frame_id;
+  t.transform.translation.x = p.position.x;
+  t.transform.translation.y = p.position.y;
+  t.transform.translation.z = p.position.z;
+  const Eigen::Quaterniond u = q.normalized();
+  t.transform.rotation.x = u.x(), t.transform.rotation.y = u.y();
+  t.transform.rotation.z = u.z(), t.transform.rotation.w = u.w();
+  tf_buffer_.setTransform(t, "odometry " + odom_sub_.getTopic());
 }
 
 void SceneEstimatorNode::onTimeJump(const ros::Time& from, const ros::Time& to) {

@@ -4,9 +4,11 @@
 #include "test_geometry.h"
 
 #include <gtest/gtest.h>
+#include <octomap/OcTree.h>
 
 #include <cstdio>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 namespace geofusion {
@@ -87,6 +89,24 @@ TEST(BackgroundMap, TableInObjectsOut) {
   std::getline(in, first);
   EXPECT_NE(first.find("Octomap"), std::string::npos) << first;
   std::remove(path.c_str());
+  // The message payload (octomap_msgs/Octomap data) reads back into the same occupied voxels.
+  const std::string data = masked.binaryData();
+  ASSERT_FALSE(data.empty());
+  std::istringstream payload(data, std::ios::binary);
+  octomap::OcTree back(masked.config().resolution_m);
+  ASSERT_TRUE(back.readBinaryData(payload));
+  std::size_t leaves = 0;
+  for (auto it = back.begin_leafs(); it != back.end_leafs(); ++it) {
+    if (!back.isNodeOccupied(*it)) continue;
+    ++leaves;
+    EXPECT_TRUE(masked.isOccupied(Eigen::Vector3d(it.getX(), it.getY(), it.getZ())));
+  }
+  EXPECT_GT(leaves, 0u);
+  for (const Eigen::Vector3d& p : masked.occupiedCentres()) {
+    const octomap::OcTreeNode* node = back.search(p.x(), p.y(), p.z());
+    ASSERT_NE(node, nullptr);
+    EXPECT_TRUE(back.isNodeOccupied(node));
+  }
   // Bad input inserts nothing.
   EXPECT_EQ(masked.insert(DepthImageView{}, scene.K, scene.cameras[0], {}), 0);
 }

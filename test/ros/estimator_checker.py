@@ -82,22 +82,12 @@ class EstimatorReplayTest(unittest.TestCase):
         self.assertGreaterEqual(len(maps), KEYFRAMES - 1)
         final = maps[-1]
         self.assertEqual(final.header.frame_id, 'map')
-        truth = [(o['class_name'], o['pose'][:3]) for o in gt['objects']]
-        matched, false = set(), 0
+        matched, false = util.match_objects(final.objects, gt, 0.02)
         for o in final.objects:
-            p = (o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z)
-            best, best_i = 1e9, -1
-            for i, (name, q) in enumerate(truth):
-                if name == o.class_name and i not in matched and math.dist(p, q) < best:
-                    best, best_i = math.dist(p, q), i
-            if best < 0.02:
-                matched.add(best_i)
-            else:
-                false += 1
             self.assertGreater(o.id, 0, 'id 0 is the support plane')
             self.assertTrue(0.0 <= o.existence_score <= 1.0)
         self.assertEqual(false, 0)
-        self.assertGreaterEqual(len(matched), len(truth) - 2)
+        self.assertGreaterEqual(len(matched), len(gt['objects']) - 2)
         self.assertTrue(final.has_support_plane)
         self.assertAlmostEqual(-final.support_plane[3], gt['table']['height'], delta=0.01)
         self.assertTrue(final.contacts, 'no contacts in the map')
@@ -175,6 +165,39 @@ class EstimatorReplayTest(unittest.TestCase):
         second_sum = sum(o.num_measurements for o in second.objects)
         self.assertLess(second_sum, 0.6 * first_sum)
         self.assertGreater(len(second.objects), 0)
+
+        # Objects that leave the map leave rviz. Midway through a third replay the false-positive
+        # threshold is made strict, so objects already on show whose false-positive score is
+        # above it leave the map (false-positive removal): each object marker array must show
+        # exactly the map's objects.
+        Client(NS, timeout=10).update_configuration({'min_score': 0.0})
+        with self.lock:
+            start = len(self.maps)
+        player = util.play_async(os.path.join(self.dir, 'demo_01.bag'), rate=1.0)
+        deadline = time.time() + 30.0
+        while time.time() < deadline:
+            with self.lock:
+                if len(self.maps) >= start + KEYFRAMES // 3 and len(self.maps[-1].objects) >= 5:
+                    break
+            time.sleep(0.05)
+        Client(NS, timeout=10).update_configuration({'eps_fp': 0.05})
+        player.wait()
+        time.sleep(2.0)
+        with self.lock:
+            maps, markers = self.maps[start:], list(self.markers)
+        by_stamp = {m.markers[0].header.stamp: m for m in markers if m.markers}
+        removed_on_show = 0
+        for before, after in zip(maps, maps[1:]):
+            gone = {o.id for o in before.objects} - {o.id for o in after.objects}
+            shown = by_stamp.get(after.header.stamp)
+            self.assertIsNotNone(shown, 'no markers for the map at %s' % after.header.stamp)
+            self.assertEqual(shown.markers[0].action, Marker.DELETEALL)
+            drawn = {m.id for m in shown.markers if m.ns == 'objects'}
+            self.assertEqual(drawn, {o.id for o in after.objects})
+            self.assertFalse(drawn & gone, 'markers left behind for removed objects')
+            if after.objects:  # a reset empties the map too; count removals only
+                removed_on_show += len(gone)
+        self.assertGreater(removed_on_show, 0, 'no object left the map while on show')
 
 
 if __name__ == '__main__':

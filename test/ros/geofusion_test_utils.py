@@ -1,4 +1,5 @@
 """Helpers shared by the package's rostest checkers (imported, not run)."""
+import math
 import os
 import subprocess
 import tempfile
@@ -45,6 +46,30 @@ def wait_for_graph(subscribed_topics, published_topics, timeout_s=30.0):
 def play(bag, rate=1.0):
     """Plays a bag with --clock (the tests run with /use_sim_time) and waits for the end."""
     subprocess.check_call(['rosbag', 'play', '--clock', '-q', '-d', '1', '-r', str(rate), bag])
+
+
+def play_async(bag, rate=1.0):
+    """Starts playing a bag with --clock; returns the process (wait() for the end)."""
+    return subprocess.Popen(['rosbag', 'play', '--clock', '-q', '-d', '1', '-r', str(rate), bag],
+                            stdout=subprocess.DEVNULL)
+
+
+def match_objects(objects, gt, tolerance_m):
+    """Greedy class-aware matching of geofusion/MapObject messages to the ground truth's objects
+    by position; returns (matched ground-truth indices, number of unmatched estimates)."""
+    truth = [(o['class_name'], o['pose'][:3]) for o in gt['objects']]
+    matched, false = set(), 0
+    for o in objects:
+        p = (o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z)
+        best, best_i = 1e9, -1
+        for i, (name, q) in enumerate(truth):
+            if name == o.class_name and i not in matched and math.dist(p, q) < best:
+                best, best_i = math.dist(p, q), i
+        if best < tolerance_m:
+            matched.add(best_i)
+        else:
+            false += 1
+    return matched, false
 
 
 INPUT_TOPICS = ['/head_camera/rgb/image_raw', '/head_camera/depth_registered/image_raw',

@@ -46,6 +46,10 @@ class BackgroundMap {
   std::size_t numLeaves() const;
   /// Writes the tree as an OctoMap binary file (.bt), through a temporary file and a rename.
   bool writeBinary(const std::string& path, std::string* error) const;
+  /// The tree's binary (free/occupied) serialisation without the file header, as
+  /// octomap::OcTree::writeBinaryData writes it: what an octomap_msgs/Octomap carries in `data`
+  /// (with binary = true and id = "OcTree").
+  std::string binaryData() const;
   void clear();
   /// Removes the voxels inside the objects' boxes (plus object_margin_m); insert() does it.
   void carve(const std::vector<MaskObject>& objects);

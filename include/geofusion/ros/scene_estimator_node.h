@@ -11,6 +11,8 @@
 #include <dynamic_reconfigure/server.h>
 #include <geofusion/SaveMap.h>
 #include <geofusion/SceneEstimatorConfig.h>
+#include <nav_msgs/Odometry.h>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <std_srvs/Trigger.h>
 #include <tf2_ros/buffer.h>
@@ -35,6 +37,7 @@ class SceneEstimatorNode {
                const sensor_msgs::CameraInfoConstPtr& info,
                const geofusion::DetectionArrayConstPtr& dets);
   void onTimeJump(const ros::Time& from, const ros::Time& to);
+  void onOdometry(const nav_msgs::OdometryConstPtr& msg);
   void publish(const KeyframeResult& result, const std_msgs::Header& header);
   void broadcastCorrection(const ros::Time& stamp);
   void publishBackground(const std_msgs::Header& header);
@@ -61,6 +64,7 @@ class SceneEstimatorNode {
   tf2_ros::TransformListener tf_listener_;
   tf2_ros::TransformBroadcaster tf_broadcaster_;
   ros::Publisher map_pub_, markers_pub_, path_pub_, background_markers_pub_, background_cloud_pub_;
+  ros::Publisher background_octomap_pub_;  // advertised only when built with octomap_msgs
   int background_publish_every_ = 5;
   ros::ServiceServer save_srv_, reset_srv_;
   diagnostic_updater::Updater diagnostics_;
@@ -69,6 +73,13 @@ class SceneEstimatorNode {
   boost::recursive_mutex reconfigure_mutex_;
   std::unique_ptr<dynamic_reconfigure::Server<geofusion::SceneEstimatorConfig>> reconfigure_;
   std::unique_ptr<RgbdDetectionSubscriber> subscriber_;
+  // ~odom_topic: odometry messages go into tf_buffer_ as odom -> base, on their own queue and
+  // thread so that a frame waiting for its odometry never blocks their arrival.
+  std::string odom_topic_;
+  ros::CallbackQueue odom_queue_;
+  ros::Subscriber odom_sub_;
+  std::unique_ptr<ros::AsyncSpinner> odom_spinner_;
+  ros::Time last_odom_stamp_;  // odometry thread only
 };
 
 }  // namespace geofusion
