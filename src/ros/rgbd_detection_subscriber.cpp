@@ -81,6 +81,14 @@ std::vector<std::string> RgbdDetectionSubscriber::topics() const {
           nh_.resolveName(config_.camera_info_topic), nh_.resolveName(config_.detections_topic)};
 }
 
+std::vector<std::size_t> RgbdDetectionSubscriber::messageCounts() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<std::size_t> out;
+  for (std::size_t i = 0; i < monitor_->inputNames().size(); ++i)
+    out.push_back(monitor_->messageCount(i));
+  return out;
+}
+
 std::size_t RgbdDetectionSubscriber::synchronizedCount() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return monitor_->synchronizedCount();

@@ -15,6 +15,7 @@
 #include <octomap_msgs/Octomap.h>
 #endif
 
+#include <algorithm>
 #include <cmath>
 
 namespace geofusion {
@@ -273,7 +274,25 @@ void SceneEstimatorNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   }
   status.add("method", method_name_);
   status.add("synchronised frames", frames_);
-  status.add("synchronised by the subscriber", subscriber_ ? subscriber_->synchronizedCount() : 0);
+  if (subscriber_) {
+    // Input rates over the last diagnostics period; messages that never made a synchronised set
+    // (the most frequent input's count minus the sets) are the synchroniser's drops.
+    const std::vector<std::size_t> counts = subscriber_->messageCounts();
+    const std::vector<std::string> topics = subscriber_->topics();
+    const std::size_t synced = subscriber_->synchronizedCount();
+    const ros::WallTime now = ros::WallTime::now();
+    const double dt = last_rates_time_.isZero() ? 0.0 : (now - last_rates_time_).toSec();
+    for (std::size_t i = 0; i < counts.size() && i < topics.size(); ++i) {
+      const std::size_t before = i < last_counts_.size() ? last_counts_[i] : 0;
+      const double rate = dt > 0.0 && counts[i] >= before ? (counts[i] - before) / dt : 0.0;
+      status.addf("input rate " + topics[i], "%.1f Hz", rate);
+    }
+    const std::size_t most = counts.empty() ? 0 : *std::max_element(counts.begin(), counts.end());
+    status.add("synchronised by the subscriber", synced);
+    status.add("sync drops", most > synced ? most - synced : 0);
+    last_counts_ = counts;
+    last_rates_time_ = now;
+  }
   status.add("keyframes", keyframes_);
   status.add("frames without TF", tf_failures_);
   status.add("frames with unusable depth", bad_depth_);

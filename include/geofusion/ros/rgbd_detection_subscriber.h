@@ -57,6 +57,8 @@ class RgbdDetectionSubscriber {
   /// The resolved topic names, in the order rgb, depth, camera_info, detections.
   std::vector<std::string> topics() const;
   std::size_t synchronizedCount() const;
+  /// Messages received on each input (order of topics()) since the last reset or time jump.
+  std::vector<std::size_t> messageCounts() const;
 
  private:
   using Policy = message_filters::sync_policies::ApproximateTime<

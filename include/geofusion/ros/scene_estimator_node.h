@@ -24,6 +24,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <vector>
 
 namespace geofusion {
 
@@ -69,7 +70,9 @@ class SceneEstimatorNode {
   ros::ServiceServer save_srv_, reset_srv_;
   diagnostic_updater::Updater diagnostics_;
   ros::WallTimer diagnostics_timer_;
-  std::size_t frames_ = 0;  // synchronised sets received
+  std::size_t frames_ = 0;                // synchronised sets received
+  std::vector<std::size_t> last_counts_;  // input counts at the last diagnostics (rates)
+  ros::WallTime last_rates_time_;
   boost::recursive_mutex reconfigure_mutex_;
   std::unique_ptr<dynamic_reconfigure::Server<geofusion::SceneEstimatorConfig>> reconfigure_;
   std::unique_ptr<RgbdDetectionSubscriber> subscriber_;
