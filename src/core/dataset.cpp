@@ -36,6 +36,26 @@ bool suiteByName(const std::string& name, SuiteSpec* suite) {
     s.keyframes = 200;
     s.clutter.area_x_m = 0.45;
     s.clutter.area_y_m = 0.34;
+  } else if (name == "vo" || name == "vo_fast") {
+    // Visual odometry: every 30 Hz frame has images, table and floor are textured. "vo": the
+    // table orbit of the other suites (15 s); "vo_fast": 10 s with a faster orbit and the head
+    // swinging across the table (camera turns up to about 80 deg/s).
+    s.model_set = "primitives";
+    s.image_every = 1;
+    s.textured_background = true;
+    s.clutter.area_x_m = 0.36;
+    s.clutter.area_y_m = 0.26;
+    if (name == "vo") {
+      s.scenes = {{"vo_orbit", 31, 10}};
+      s.keyframes = 450;
+    } else {
+      s.scenes = {{"vo_fast", 32, 10}};
+      s.keyframes = 300;
+      s.trajectory.arc_rad = 3.2;
+      s.trajectory.pause_fraction = 0.05;
+      s.trajectory.look_amplitude_m = 0.3;
+      s.trajectory.look_rate = 5.0;
+    }
   } else {
     return false;
   }
@@ -46,7 +66,7 @@ bool suiteByName(const std::string& name, SuiteSpec* suite) {
 }
 
 std::vector<std::string> suiteNames() {
-  return {"demo", "bench"};
+  return {"demo", "bench", "vo", "vo_fast"};
 }
 
 std::string describeSuite(const SuiteSpec& s) {
@@ -71,6 +91,11 @@ std::string describeSuite(const SuiteSpec& s) {
     << m.symmetric_flip_rate << " " << m.class_swap_rate << " " << m.miss_rate << " "
     << m.miss_occlusion_gain << " " << m.min_visible_pixels << " " << m.false_positives_per_frame;
   for (const auto& g : m.class_noise_gain) o << " " << g.first << "=" << g.second;
+  // Later additions, said only when set (the requests of earlier suites stay as they were).
+  if (t.look_amplitude_m != TrajectoryConfig().look_amplitude_m ||
+      t.look_rate != TrajectoryConfig().look_rate)
+    o << "; look " << t.look_amplitude_m << " " << t.look_rate;
+  if (s.textured_background) o << "; textured background";
   return o.str();
 }
 

@@ -1,5 +1,7 @@
 #include "geofusion/core/run_evaluation.h"
 
+#include "geofusion/core/trajectory_metrics.h"
+
 #include "atomic_file.h"
 #include "geofusion/core/clutter_scene.h"
 #include "geofusion/core/evaluation.h"
@@ -74,26 +76,6 @@ double boundingRadius(const ObjectModel& model) {
   double r = 0.0;
   for (const auto& v : model.mesh.vertices) r = std::max(r, static_cast<double>(v.norm()));
   return r;
-}
-
-// Rigid alignment of the estimated trajectory onto the true one (evo's `-a`): T_true_est.
-Eigen::Isometry3d alignTrajectories(const std::vector<Eigen::Vector3d>& est,
-                                    const std::vector<Eigen::Vector3d>& truth, double* rmse) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  *rmse = 0.0;
-  if (est.size() < 3) return T;
-  Eigen::Matrix3Xd src(3, static_cast<Eigen::Index>(est.size()));
-  Eigen::Matrix3Xd dst(3, static_cast<Eigen::Index>(est.size()));
-  for (std::size_t i = 0; i < est.size(); ++i) {
-    src.col(static_cast<Eigen::Index>(i)) = est[i];
-    dst.col(static_cast<Eigen::Index>(i)) = truth[i];
-  }
-  T.matrix() = Eigen::umeyama(src, dst, false);
-  if (!T.matrix().allFinite()) return Eigen::Isometry3d::Identity();
-  double sq = 0.0;
-  for (std::size_t i = 0; i < est.size(); ++i) sq += (T * est[i] - truth[i]).squaredNorm();
-  *rmse = std::sqrt(sq / static_cast<double>(est.size()));
-  return T;
 }
 
 using ContactKey = std::tuple<int, int, std::string>;  // lower index, higher index, type

@@ -1,7 +1,12 @@
 #include "geofusion/core/sequence.h"
 
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 
 namespace geofusion {
 
@@ -83,8 +88,10 @@ std::vector<FramePose> makeTrajectory(const ClutterScene& scene, const Trajector
     f.T_map_base = planar(base_xy.x(), base_xy.y(), yaw);
     // Head: camera at height h looking at the clutter (pan and tilt from the look-at).
     const Eigen::Vector3d eye = f.T_map_base * Eigen::Vector3d(0.1, 0.0, h);
-    const Eigen::Vector3d target = centre + Eigen::Vector3d(0.03 * std::sin(5.0 * progress),
-                                                            0.03 * std::cos(4.0 * progress), 0.0);
+    const double look = cfg.look_rate * progress;
+    const Eigen::Vector3d target =
+        centre + Eigen::Vector3d(cfg.look_amplitude_m * std::sin(5.0 * look),
+                                 cfg.look_amplitude_m * std::cos(4.0 * look), 0.0);
     const Eigen::Vector3d dir = (f.T_map_base.inverse().linear() * (target - eye)).normalized();
     const double pan = std::atan2(dir.y(), dir.x());
     const double tilt = std::atan2(-dir.z(), dir.head<2>().norm());
@@ -198,11 +205,67 @@ DetectorModel DetectorModel::posecnn() {
   return m;
 }
 
-SequenceRenderer::SequenceRenderer(const ClutterScene& scene, const PinholeIntrinsics& K)
+std::pair<std::string, std::string> writeBackgroundTextures(const std::string& dir,
+                                                            std::string* error) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  const int n = 1024;
+  cv::RNG rng(20201102);
+  // Sum of smooth random fields at several scales (value noise), in [0, 1].
+  auto noise = [&](std::initializer_list<int> cells, double stretch_x) {
+    cv::Mat sum = cv::Mat::zeros(n, n, CV_32F);
+    double weight = 0.0, w = 1.0;
+    for (int c : cells) {
+      cv::Mat small(c, std::max(2, static_cast<int>(c * stretch_x)), CV_32F), big;
+      rng.fill(small, cv::RNG::UNIFORM, 0.0, 1.0);
+      cv::resize(small, big, cv::Size(n, n), 0, 0, cv::INTER_CUBIC);
+      sum += w * big;
+      weight += w;
+      w *= 0.6;
+    }
+    return cv::Mat(sum / weight);
+  };
+  // Wood: grain stretched along x, knots and fine fibres.
+  cv::Mat grain = noise({6, 24, 96, 256}, 0.15), fibres = noise({512}, 1.0);
+  cv::Mat table(n, n, CV_8UC3), floor(n, n, CV_8UC3);
+  for (int v = 0; v < n; ++v) {
+    for (int u = 0; u < n; ++u) {
+      const float g = grain.at<float>(v, u), f = fibres.at<float>(v, u);
+      const float k = std::clamp(0.55f + 0.9f * (g - 0.5f) + 0.35f * (f - 0.5f), 0.f, 1.2f);
+      table.at<cv::Vec3b>(v, u) =
+          cv::Vec3b(cv::saturate_cast<uchar>(70 * k), cv::saturate_cast<uchar>(115 * k),
+                    cv::saturate_cast<uchar>(158 * k));  // BGR
+    }
+  }
+  // Floor: 40 cm tiles of speckled grey with dark joints.
+  cv::Mat speckle = noise({32, 128, 512}, 1.0);
+  for (int v = 0; v < n; ++v) {
+    for (int u = 0; u < n; ++u) {
+      const bool joint = (u % 51) < 2 || (v % 51) < 2;
+      const float s = speckle.at<float>(v, u);
+      const uchar c = joint ? 40 : cv::saturate_cast<uchar>(60 + 150 * s);
+      floor.at<cv::Vec3b>(v, u) = cv::Vec3b(c, c, cv::saturate_cast<uchar>(c + 8));
+    }
+  }
+  const std::string table_path = dir + "/table_wood.png", floor_path = dir + "/floor_tiles.png";
+  if (!cv::imwrite(table_path, table) || !cv::imwrite(floor_path, floor)) {
+    if (error) *error = "cannot write the background textures into " + dir;
+    return {};
+  }
+  return {table_path, floor_path};
+}
+
+SequenceRenderer::SequenceRenderer(const ClutterScene& scene, const PinholeIntrinsics& K,
+                                   const std::pair<std::string, std::string>& textures)
     : scene_(scene), K_(K) {
   for (const auto& o : scene.objects) object_meshes_.push_back(renderer_.addMesh(o.model->mesh));
-  table_mesh_ = renderer_.addMesh(scene.table.model().mesh);
-  floor_mesh_ = renderer_.addMesh(makeBox(Eigen::Vector3d(8.0, 8.0, 0.02)));
+  TriangleMesh table = scene.table.model().mesh;
+  TriangleMesh floor = makeBox(Eigen::Vector3d(8.0, 8.0, 0.02));
+  if (!textures.first.empty() && table.uvs.size() == table.vertices.size())
+    table.texture_path = textures.first;
+  if (!textures.second.empty()) floor.texture_path = textures.second;
+  table_mesh_ = renderer_.addMesh(table);
+  floor_mesh_ = renderer_.addMesh(floor);
 }
 
 SequenceFrame SequenceRenderer::render(const FramePose& pose, const DepthNoise& depth_noise,

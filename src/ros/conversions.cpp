@@ -1,5 +1,6 @@
 #include "geofusion/ros/conversions.h"
 
+#include <cv_bridge/cv_bridge.h>
 #include <sensor_msgs/image_encodings.h>
 
 #include <cmath>
@@ -94,6 +95,27 @@ bool depthToMetres(const sensor_msgs::Image& depth, std::vector<float>* metres) 
           std::isfinite(z) && z > 0.f ? z : 0.f;
     }
   }
+  return true;
+}
+
+bool toGray(const sensor_msgs::Image& image, std::vector<std::uint8_t>* gray, std::string* error) {
+  if (image.width == 0 || image.height == 0 ||
+      image.data.size() < static_cast<std::size_t>(image.step) * image.height) {
+    if (error) *error = "empty or truncated image";
+    return false;
+  }
+  cv_bridge::CvImageConstPtr cv;
+  try {
+    cv = cv_bridge::toCvCopy(image, sensor_msgs::image_encodings::MONO8);
+  } catch (const std::exception& e) {
+    if (error)
+      *error = std::string("cannot convert '") + image.encoding + "' to mono8: " + e.what();
+    return false;
+  }
+  gray->resize(static_cast<std::size_t>(cv->image.cols) * cv->image.rows);
+  for (int r = 0; r < cv->image.rows; ++r)
+    std::memcpy(gray->data() + static_cast<std::size_t>(r) * cv->image.cols,
+                cv->image.ptr<std::uint8_t>(r), static_cast<std::size_t>(cv->image.cols));
   return true;
 }
 

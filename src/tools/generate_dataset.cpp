@@ -3,7 +3,8 @@
 // rosbag with the topics of a real Fetch recording and a ground-truth YAML beside it. Prints the
 // calibration of the noisy inputs (detections' ADD-S per class, odometry drift, depth noise).
 //
-//   generate_dataset --suite demo|bench [--out-dir DIR] [--models DIR] [--model-set YAML]
+//   generate_dataset --suite demo|bench|vo|vo_fast [--out-dir DIR] [--models DIR] [--model-set
+//   YAML]
 //       [--scenes bench_01,...] [--keyframes N] [--image-every N] [--detector densefusion|posecnn]
 //       [--depth-encoding 16UC1|32FC1] [--no-compression] [--previews N] [--force]
 #include "command_line.h"
@@ -40,7 +41,7 @@ struct Options {
 
 void usage() {
   std::cerr
-      << "usage: generate_dataset --suite demo|bench [--out-dir DIR] [--models DIR]\n"
+      << "usage: generate_dataset --suite demo|bench|vo|vo_fast [--out-dir DIR] [--models DIR]\n"
          "         [--model-set YAML] [--scenes NAME,NAME] [--keyframes N] [--image-every N]\n"
          "         [--detector densefusion|posecnn] [--depth-encoding 16UC1|32FC1]\n"
          "         [--no-compression] [--previews N=4] [--force]\n"
@@ -249,7 +250,15 @@ int main(int argc, char** argv) {
       std::cerr << "generate_dataset: " << error << "\n";
       return 1;
     }
-    SequenceRenderer renderer(scene, K);
+    std::pair<std::string, std::string> textures;
+    if (suite.textured_background) {
+      textures = writeBackgroundTextures(opt.out_dir + "/textures", &error);
+      if (textures.first.empty()) {
+        std::cerr << "generate_dataset: " << error << "\n";
+        return 1;
+      }
+    }
+    SequenceRenderer renderer(scene, K, textures);
     if (!renderer.ok()) {
       std::cerr << "generate_dataset: the OSMesa renderer could not start\n";
       return 1;

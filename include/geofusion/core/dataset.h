@@ -33,6 +33,8 @@ struct SuiteSpec {
   DepthNoise depth;
   DetectorModel detector;
   double stamp_origin_s = 1600000000.0;  ///< ROS time of the first frame
+  /// Table and floor textured (writeBackgroundTextures) instead of plain colours.
+  bool textured_background = false;
 
   int cameraFrames() const { return (keyframes - 1) * image_every + 1; }
   bool isKeyframe(int frame) const { return image_every > 0 && frame % image_every == 0; }

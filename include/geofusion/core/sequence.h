@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace geofusion {
@@ -35,6 +36,10 @@ struct TrajectoryConfig {
   double max_height_m = 1.45;
   double arc_rad = 2.6;          ///< angle swept around the table
   double pause_fraction = 0.15;  ///< share of frames standing still
+  /// The head's look-at point swings about the clutter centre by this much (metres) ...
+  double look_amplitude_m = 0.03;
+  /// ... this many times faster than the default swing (larger: faster head turns).
+  double look_rate = 1.0;
 };
 
 struct FramePose {
@@ -123,11 +128,21 @@ struct SequenceFrame {
   std::vector<int> detection_truth;  ///< per detection: object index, -1 = false positive
 };
 
+/// Writes deterministic procedural textures for the table (wood-like grain) and the floor
+/// (speckled tiles) as PNG files into `dir` (created) and returns their paths (table, floor);
+/// empty paths and `error` set on failure. Scenes rendered with them have texture everywhere a
+/// real room has, which feature-based visual odometry needs.
+std::pair<std::string, std::string> writeBackgroundTextures(const std::string& dir,
+                                                            std::string* error);
+
 /// Renders frames of a scene and makes their detections. Holds the renderer and the uploaded
 /// meshes (textured) of the scene, the table and the floor.
 class SequenceRenderer {
  public:
-  SequenceRenderer(const ClutterScene& scene, const PinholeIntrinsics& K);
+  /// `background_textures`: textures for the table top and the floor (writeBackgroundTextures);
+  /// default: plain colours.
+  SequenceRenderer(const ClutterScene& scene, const PinholeIntrinsics& K,
+                   const std::pair<std::string, std::string>& background_textures = {});
   bool ok() const { return renderer_.ok(); }
   const PinholeIntrinsics& intrinsics() const { return K_; }
 

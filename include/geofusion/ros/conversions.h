@@ -10,6 +10,8 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 
+#include <cstdint>
+#include <string>
 #include <vector>
 
 namespace geofusion {
@@ -27,6 +29,9 @@ const char* depthProblem(const sensor_msgs::Image& depth);
 /// Depth in metres, row-major, 0 = no reading (NaN, inf, non-positive and 16-bit 0 become 0).
 /// False when depthProblem() says the image is unusable.
 bool depthToMetres(const sensor_msgs::Image& depth, std::vector<float>* metres);
+/// The image as 8-bit grey, row-major without padding (cv_bridge: mono8 as is, colour and 16-bit
+/// converted). False, with the reason, for an empty or unconvertible image.
+bool toGray(const sensor_msgs::Image& image, std::vector<std::uint8_t>* gray, std::string* error);
 /// Pinhole intrinsics from the K matrix (distortion is ignored: registered, rectified depth).
 PinholeIntrinsics intrinsicsFromCameraInfo(const sensor_msgs::CameraInfo& info);
 
