@@ -596,6 +596,7 @@ VoFrameResult VisualOdometry::track(const GrayImageView& gray, const DepthImageV
   out.relocalised = lost;
   out.T_odom_cam = T;
   out.covariance = rosOrder(s.last_cov);
+  out.frame_covariance = cov_right;
   s.state = TrackingState::kTracking;
   s.lost_frames = 0;
   s.T_prev = lost ? T : s.T_last;

@@ -152,8 +152,24 @@ void SceneEstimatorNode::onFrame(const sensor_msgs::ImageConstPtr& /*rgb*/,
                                  const geofusion::DetectionArrayConstPtr& dets) {
   Eigen::Isometry3d T_odom_cam;
   std::string error;
-  if (!lookupTransformWallTimeout(tf_buffer_, odom_frame_, dets->header.frame_id,
-                                  dets->header.stamp, tf_timeout_s_, &T_odom_cam, &error)) {
+  bool have_pose = false;
+  if (odom_topic_.empty()) {
+    have_pose = lookupTransformWallTimeout(tf_buffer_, odom_frame_, dets->header.frame_id,
+                                           dets->header.stamp, tf_timeout_s_, &T_odom_cam, &error);
+  } else {
+    // odom -> base from the odometry topic (its own buffer, so a recording's odom -> base on TF
+    // cannot mix in), base -> camera from TF.
+    Eigen::Isometry3d T_odom_base, T_base_cam;
+    const std::string base = odom_base_frame_.get();
+    have_pose = !base.empty() &&
+                lookupTransformWallTimeout(odom_buffer_, odom_frame_, base, dets->header.stamp,
+                                           tf_timeout_s_, &T_odom_base, &error) &&
+                lookupTransformWallTimeout(tf_buffer_, base, dets->header.frame_id,
+                                           dets->header.stamp, tf_timeout_s_, &T_base_cam, &error);
+    if (base.empty()) error = "no odometry received on " + odom_sub_.getTopic() + " yet";
+    T_odom_cam = T_odom_base * T_base_cam;
+  }
+  if (!have_pose) {
     std::lock_guard<std::mutex> lock(mutex_);
     ++tf_failures_;
     ROS_WARN_STREAM_THROTTLE(warn_period_s_, "geofusion: frame skipped, no TF from "
@@ -353,9 +369,10 @@ void SceneEstimatorNode::onOdometry(const nav_msgs::OdometryConstPtr& msg) {
     ROS_WARN_STREAM_THROTTLE(warn_period_s_, "geofusion: odometry time jumped back from "
                                                  << last_odom_stamp_ << " to " << msg->header.stamp
                                                  << ": TF buffer cleared");
-    tf_buffer_.clear();
+    odom_buffer_.clear();
   }
   last_odom_stamp_ = msg->header.stamp;
+  odom_base_frame_.set(msg->child_frame_id);
   geometry_msgs::TransformStamped t;
   t.header = msg->header;
   t.child_frame_id = msg->child_frame_id;
@@ -365,7 +382,7 @@ void SceneEstimatorNode::onOdometry(const nav_msgs::OdometryConstPtr& msg) {
   const Eigen::Quaterniond u = q.normalized();
   t.transform.rotation.x = u.x(), t.transform.rotation.y = u.y();
   t.transform.rotation.z = u.z(), t.transform.rotation.w = u.w();
-  tf_buffer_.setTransform(t, "odometry " + odom_sub_.getTopic());
+  odom_buffer_.setTransform(t, "odometry " + odom_sub_.getTopic());
 }
 
 void SceneEstimatorNode::onTimeJump(const ros::Time& from, const ros::Time& to) {
@@ -375,6 +392,7 @@ void SceneEstimatorNode::onTimeJump(const ros::Time& from, const ros::Time& to) 
   std::lock_guard<std::mutex> lock(mutex_);
   pipeline_->reset();
   tf_buffer_.clear();
+  odom_buffer_.clear();
   last_ = KeyframeResult();
 }
 

@@ -54,6 +54,21 @@ def play_async(bag, rate=1.0):
                             stdout=subprocess.DEVNULL)
 
 
+def strip_tf(bag, out, parent):
+    """Copies a recording without the /tf transforms whose parent is `parent` (as a robot whose
+    odometry is not on TF); returns how many transforms were dropped."""
+    import rosbag
+    dropped = 0
+    with rosbag.Bag(bag) as src, rosbag.Bag(out, 'w') as dst:
+        for topic, msg, t in src.read_messages():
+            if topic == '/tf':
+                kept = [x for x in msg.transforms if x.header.frame_id != parent]
+                dropped += len(msg.transforms) - len(kept)
+                msg.transforms = kept
+            dst.write(topic, msg, t)
+    return dropped
+
+
 def match_objects(objects, gt, tolerance_m):
     """Greedy class-aware matching of geofusion/MapObject messages to the ground truth's objects
     by position; returns (matched ground-truth indices, number of unmatched estimates)."""

@@ -10,7 +10,6 @@ import threading
 import time
 import unittest
 
-import rosbag
 import rospy
 import rostest
 from geofusion.msg import ObjectMap
@@ -42,14 +41,7 @@ class OdomTopicTest(unittest.TestCase):
         bag = os.path.join(self.dir, 'demo_01.bag')
         gt = util.load_yaml(os.path.join(self.dir, 'demo_01_gt.yaml'))
         without = os.path.join(self.dir, 'without_odom_tf.bag')
-        dropped = 0
-        with rosbag.Bag(bag) as src, rosbag.Bag(without, 'w') as dst:
-            for topic, msg, t in src.read_messages():
-                if topic == '/tf':
-                    kept = [x for x in msg.transforms if x.header.frame_id != 'odom']
-                    dropped += len(msg.transforms) - len(kept)
-                    msg.transforms = kept
-                dst.write(topic, msg, t)
+        dropped = util.strip_tf(bag, without, 'odom')
         self.assertGreater(dropped, 0, 'the recording had no odom -> base_link on /tf')
         self.assertTrue(util.wait_for_graph(util.INPUT_TOPICS + ['/odom'],
                                             [NS + '/object_map']),

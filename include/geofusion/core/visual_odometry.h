@@ -68,6 +68,9 @@ struct VoFrameResult {
   Eigen::Isometry3d T_odom_cam = Eigen::Isometry3d::Identity();
   /// Pose covariance, odom frame, ROS order: x, y, z, rotation about x, y, z (m^2, rad^2).
   Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Identity();
+  /// This frame's fit alone (its pose against the local map), camera frame, same order: how well
+  /// the frame was tracked, without the drift accumulated before.
+  Eigen::Matrix<double, 6, 6> frame_covariance = Eigen::Matrix<double, 6, 6>::Identity();
   int features = 0;             ///< ORB features found
   int features_with_depth = 0;  ///< ... with usable depth
   int matches = 0;              ///< 2D-3D matches to the local map

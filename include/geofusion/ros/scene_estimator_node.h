@@ -76,13 +76,27 @@ class SceneEstimatorNode {
   boost::recursive_mutex reconfigure_mutex_;
   std::unique_ptr<dynamic_reconfigure::Server<geofusion::SceneEstimatorConfig>> reconfigure_;
   std::unique_ptr<RgbdDetectionSubscriber> subscriber_;
-  // ~odom_topic: odometry messages go into tf_buffer_ as odom -> base, on their own queue and
-  // thread so that a frame waiting for its odometry never blocks their arrival.
+  // ~odom_topic: odometry messages go into odom_buffer_ as odom -> base (tf2 interpolates),
+  // on their own queue and thread so that a frame waiting for its odometry never blocks their
+  // arrival; base -> camera still comes from TF.
   std::string odom_topic_;
   ros::CallbackQueue odom_queue_;
   ros::Subscriber odom_sub_;
   std::unique_ptr<ros::AsyncSpinner> odom_spinner_;
   ros::Time last_odom_stamp_;  // odometry thread only
+  tf2_ros::Buffer odom_buffer_;
+  struct Guarded {
+    std::string get() const {
+      std::lock_guard<std::mutex> lock(m);
+      return v;
+    }
+    void set(const std::string& x) {
+      std::lock_guard<std::mutex> lock(m);
+      v = x;
+    }
+    mutable std::mutex m;
+    std::string v;
+  } odom_base_frame_;  // child_frame_id of the odometry messages
 };
 
 }  // namespace geofusion

@@ -1,0 +1,232 @@
+#include "geofusion/ros/visual_odometry_node.h"
+
+#include "geofusion/ros/conversions.h"
+#include "geofusion/ros/params.h"
+#include "geofusion/ros/tf_lookup.h"
+
+#include <tf2_eigen/tf2_eigen.h>
+#include <boost/bind/bind.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+namespace geofusion {
+
+namespace {
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& a) {
+  Eigen::Matrix3d S;
+  S << 0, -a.z(), a.y(), a.z(), 0, -a.x(), -a.y(), a.x(), 0;
+  return S;
+}
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+void fill(const Matrix6d& m, boost::array<double, 36>* out) {
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 6; ++c) (*out)[static_cast<std::size_t>(6 * r + c)] = m(r, c);
+}
+
+}  // namespace
+
+VisualOdometryNode::VisualOdometryNode(ros::NodeHandle nh, ros::NodeHandle pnh)
+    : nh_(nh), pnh_(pnh), tf_listener_(tf_buffer_), diagnostics_(nh, pnh) {
+  pnh_.param<std::string>("odom_frame", odom_frame_, "odom");
+  pnh_.param<std::string>("base_frame", base_frame_, "base_link");
+  pnh_.param("publish_tf", publish_tf_, true);
+  tf_timeout_s_ = paramAtLeast(pnh_, "tf_timeout_s", 0.1, 0.0);
+  warn_period_s_ = paramAtLeast(pnh_, "warn_period_s", 5.0, 0.1);
+
+  VisualOdometryConfig c;
+  c.features = paramAtLeast(pnh_, "features", c.features, 100);
+  c.pyramid_levels = paramAtLeast(pnh_, "pyramid_levels", c.pyramid_levels, 1);
+  c.fast_threshold = paramAtLeast(pnh_, "fast_threshold", c.fast_threshold, 1);
+  c.min_depth_m = paramAtLeast(pnh_, "min_depth_m", c.min_depth_m, 0.0);
+  c.max_depth_m = paramAtLeast(pnh_, "max_depth_m", c.max_depth_m, 0.1);
+  c.local_keyframes = paramAtLeast(pnh_, "local_keyframes", c.local_keyframes, 1);
+  c.min_inliers = paramAtLeast(pnh_, "min_inliers", c.min_inliers, 6);
+  c.keyframe_tracked_fraction =
+      paramAtLeast(pnh_, "keyframe_tracked_fraction", c.keyframe_tracked_fraction, 0.0);
+  c.keyframe_translation_m =
+      paramAtLeast(pnh_, "keyframe_translation_m", c.keyframe_translation_m, 0.0);
+  c.keyframe_rotation_rad =
+      paramAtLeast(pnh_, "keyframe_rotation_rad", c.keyframe_rotation_rad, 0.0);
+  c.max_speed_m_s = paramAtLeast(pnh_, "max_speed_m_s", c.max_speed_m_s, 0.01);
+  c.max_turn_rad_s = paramAtLeast(pnh_, "max_turn_rad_s", c.max_turn_rad_s, 0.01);
+  c.relocalise_frames = paramAtLeast(pnh_, "relocalise_frames", c.relocalise_frames, 1);
+  c.restart_sigma_position_m =
+      paramAtLeast(pnh_, "restart_sigma_position_m", c.restart_sigma_position_m, 0.0);
+  c.restart_sigma_rotation_rad =
+      paramAtLeast(pnh_, "restart_sigma_rotation_rad", c.restart_sigma_rotation_rad, 0.0);
+  vo_ = std::make_unique<VisualOdometry>(c);
+
+  std::string rgb_topic, depth_topic, info_topic;
+  pnh_.param<std::string>("rgb_topic", rgb_topic, "/head_camera/rgb/image_raw");
+  pnh_.param<std::string>("depth_topic", depth_topic, "/head_camera/depth_registered/image_raw");
+  pnh_.param<std::string>("camera_info_topic", info_topic, "/head_camera/rgb/camera_info");
+  const int queue = paramAtLeast(pnh_, "queue_size", 10, 1);
+  const double max_interval = paramAtLeast(pnh_, "sync_max_interval_s", 0.02, 0.0);
+
+  odom_pub_ = pnh_.advertise<nav_msgs::Odometry>("odom", 10);
+  rgb_sub_.subscribe(nh_, rgb_topic, static_cast<uint32_t>(queue));
+  depth_sub_.subscribe(nh_, depth_topic, static_cast<uint32_t>(queue));
+  info_sub_.subscribe(nh_, info_topic, static_cast<uint32_t>(queue));
+  Policy policy(static_cast<uint32_t>(queue));
+  policy.setMaxIntervalDuration(ros::Duration(max_interval));
+  sync_ = std::make_unique<message_filters::Synchronizer<Policy>>(
+      static_cast<const Policy&>(policy), rgb_sub_, depth_sub_, info_sub_);
+  sync_->registerCallback(boost::bind(&VisualOdometryNode::onFrame, this, boost::placeholders::_1,
+                                      boost::placeholders::_2, boost::placeholders::_3));
+
+  diagnostics_.setHardwareID("geofusion");
+  diagnostics_.add("visual odometry", this, &VisualOdometryNode::diagnose);
+  diagnostics_timer_ = pnh_.createWallTimer(
+      ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { diagnostics_.force_update(); });
+  ROS_INFO_STREAM("geofusion: visual odometry on "
+                  << rgb_sub_.getTopic() << ", " << depth_sub_.getTopic() << "; publishing "
+                  << odom_pub_.getTopic() << " and " << (publish_tf_ ? "" : "no ") << "TF "
+                  << odom_frame_ << " -> " << (base_frame_.empty() ? "camera" : base_frame_));
+}
+
+void VisualOdometryNode::onFrame(const sensor_msgs::ImageConstPtr& rgb,
+                                 const sensor_msgs::ImageConstPtr& depth,
+                                 const sensor_msgs::CameraInfoConstPtr& info) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++frames_;
+  const ros::Time stamp = rgb->header.stamp;
+  if (have_last_ && stamp + ros::Duration(0.5) < last_stamp_) {
+    ROS_WARN_STREAM("geofusion: visual odometry: time jumped back from "
+                    << last_stamp_ << " to " << stamp
+                    << " (a looping bag or restarted driver): odometry restarts");
+    started_ = false;
+    have_last_ = false;
+  }
+  std::vector<std::uint8_t> gray;
+  std::vector<float> metres;
+  std::string error;
+  if (!toGray(*rgb, &gray, &error) || !depthToMetres(*depth, &metres) ||
+      rgb->width != depth->width || rgb->height != depth->height) {
+    ++skipped_;
+    const char* why = depthProblem(*depth);
+    ROS_WARN_STREAM_THROTTLE(warn_period_s_,
+                             "geofusion: visual odometry skipped a frame: "
+                                 << (!error.empty() ? error
+                                     : why          ? std::string(why)
+                                                    : std::string("RGB and depth sizes differ"))
+                                 << " (" << skipped_ << " so far)");
+    return;
+  }
+  // The camera's place on the robot: base -> camera from TF (the head may move).
+  const std::string& camera_frame = rgb->header.frame_id;
+  Eigen::Isometry3d T_base_cam = Eigen::Isometry3d::Identity();
+  if (!base_frame_.empty() &&
+      !lookupTransformWallTimeout(tf_buffer_, base_frame_, camera_frame, stamp, tf_timeout_s_,
+                                  &T_base_cam, &error) &&
+      !lookupTransformWallTimeout(tf_buffer_, base_frame_, camera_frame, ros::Time(0), 0.0,
+                                  &T_base_cam, &error)) {
+    ++skipped_;
+    ROS_WARN_STREAM_THROTTLE(warn_period_s_, "geofusion: visual odometry skipped a frame, no TF "
+                                                 << base_frame_ << " -> " << camera_frame << ": "
+                                                 << error);
+    return;
+  }
+  if (!started_) {
+    // odom starts where the base is: the camera starts at base -> camera.
+    vo_->reset(T_base_cam);
+    started_ = true;
+  }
+  const PinholeIntrinsics K = intrinsicsFromCameraInfo(*info);
+  const VoFrameResult r = vo_->track(
+      GrayImageView{gray.data(), static_cast<int>(rgb->width), static_cast<int>(rgb->height), 0},
+      DepthImageView{metres.data(), static_cast<int>(depth->width),
+                     static_cast<int>(depth->height)},
+      K, stamp.toSec());
+  last_ = r;
+  recent_ms_.push_back(r.time_ms);
+  if (recent_ms_.size() > 100) recent_ms_.erase(recent_ms_.begin());
+  if (!r.pose_valid) {
+    ++lost_;
+    ROS_WARN_STREAM_THROTTLE(
+        warn_period_s_, "geofusion: visual odometry lost: " << r.problem << " (" << lost_
+                                                            << " frames without a pose so far)");
+    return;
+  }
+  const bool discontinuous = r.restarted && have_last_;
+  if (discontinuous) {
+    ++restarts_;
+    ROS_WARN_STREAM(
+        "geofusion: visual odometry restarted a new map at the last known pose; the "
+        "pose covariance grew by the restart sigmas (no motion is published for "
+        "the jump)");
+  }
+  if (r.relocalised) {
+    ++relocalisations_;
+    ROS_INFO_STREAM("geofusion: visual odometry relocalised against its map");
+  }
+
+  // The child frame: the base (camera pose through the base -> camera transform) or the camera.
+  const bool to_base = !base_frame_.empty();
+  const Eigen::Isometry3d T_cam_child =
+      to_base ? T_base_cam.inverse() : Eigen::Isometry3d::Identity();
+  const Eigen::Isometry3d T_odom_child = r.T_odom_cam * T_cam_child;
+  // Covariance of the child pose: the camera's, moved along the lever arm camera -> child.
+  Matrix6d J = Matrix6d::Identity();
+  J.topRightCorner<3, 3>() = -skew(r.T_odom_cam.linear() * T_cam_child.translation());
+  const Matrix6d cov = J * r.covariance * J.transpose();
+
+  nav_msgs::Odometry odom;
+  odom.header.stamp = stamp;
+  odom.header.frame_id = odom_frame_;
+  odom.child_frame_id = to_base ? base_frame_ : camera_frame;
+  odom.pose.pose = toPoseMsg(T_odom_child);
+  fill(cov, &odom.pose.covariance);
+  // Twist in the child frame from the last pose; none across a restart (its covariance says so).
+  const double dt = have_last_ ? (stamp - last_stamp_).toSec() : 0.0;
+  Matrix6d twist_cov = Matrix6d::Identity() * 1e3;
+  if (have_last_ && !discontinuous && dt > 1e-4) {
+    const Eigen::Isometry3d step = T_last_odom_child_.inverse() * T_odom_child;
+    const Eigen::AngleAxisd aa(step.linear());
+    const Eigen::Vector3d v = step.translation() / dt, w = aa.axis() * aa.angle() / dt;
+    odom.twist.twist.linear.x = v.x(), odom.twist.twist.linear.y = v.y();
+    odom.twist.twist.linear.z = v.z();
+    odom.twist.twist.angular.x = w.x(), odom.twist.twist.angular.y = w.y();
+    odom.twist.twist.angular.z = w.z();
+    twist_cov = 2.0 * r.frame_covariance / (dt * dt);
+  }
+  fill(twist_cov, &odom.twist.covariance);
+  odom_pub_.publish(odom);
+  if (publish_tf_) {
+    geometry_msgs::TransformStamped t = tf2::eigenToTransform(T_odom_child);
+    t.header = odom.header;
+    t.child_frame_id = odom.child_frame_id;
+    tf_broadcaster_.sendTransform(t);
+  }
+  T_last_odom_child_ = T_odom_child;
+  last_stamp_ = stamp;
+  have_last_ = true;
+}
+
+void VisualOdometryNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (frames_ == 0) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no synchronised RGB-D input yet");
+  } else if (last_.state == TrackingState::kLost) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "lost: " + last_.problem);
+  } else {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, toString(last_.state));
+  }
+  std::vector<double> ms = recent_ms_;
+  std::sort(ms.begin(), ms.end());
+  status.add("frames", frames_);
+  status.add("frames without a pose", lost_);
+  status.add("frames skipped (input, TF)", skipped_);
+  status.add("restarts", restarts_);
+  status.add("relocalisations", relocalisations_);
+  status.add("keyframes in the local map", vo_->numKeyframes());
+  status.add("features", last_.features);
+  status.add("features with depth", last_.features_with_depth);
+  status.add("inliers", last_.inliers);
+  status.add("median ms per frame (last 100)", ms.empty() ? 0.0 : ms[ms.size() / 2]);
+}
+
+}  // namespace geofusion
