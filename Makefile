@@ -3,10 +3,11 @@
 #   make test   install what is missing, build, and run every test (exit code = result)
 #   make data SUITE=demo|bench   generate (or reuse) a data suite in ~/.cache/geofusion/data
 #   make bench [SUITE=demo]      the benchmark: four methods, report in results/<suite>/
-.PHONY: demo test data bench deps build lint clean help
+#   make vo-bench                the visual odometry benchmark, report in results/vo/
+.PHONY: demo test data bench vo-bench deps build lint clean help
 
 help:
-	@sed -n '2,6p' Makefile
+	@sed -n '2,7p' Makefile
 
 deps:
 	@bash scripts/install_deps.sh
@@ -25,6 +26,9 @@ data: build
 
 bench: build
 	@bash scripts/bench.sh
+
+vo-bench: build
+	@bash scripts/vo_bench.sh
 
 lint:
 	@bash scripts/lint.sh
