@@ -69,13 +69,17 @@ def strip_tf(bag, out, parent):
     return dropped
 
 
-def match_objects(objects, gt, tolerance_m):
+def match_objects(objects, gt, tolerance_m, frame=None):
     """Greedy class-aware matching of geofusion/MapObject messages to the ground truth's objects
-    by position; returns (matched ground-truth indices, number of unmatched estimates)."""
+    by position; returns (matched ground-truth indices, number of unmatched estimates). `frame`:
+    the estimate's frame in the ground truth's, [x, y, z, qx, qy, qz, qw] (default: the same)."""
     truth = [(o['class_name'], o['pose'][:3]) for o in gt['objects']]
+    x, y, z, qx, qy, qz, qw = frame if frame else (0, 0, 0, 0, 0, 0, 1)
+    R = rotation(qx, qy, qz, qw)
     matched, false = set(), 0
     for o in objects:
-        p = (o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z)
+        q = (o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z)
+        p = tuple(sum(R[i][k] * q[k] for k in range(3)) + (x, y, z)[i] for i in range(3))
         best, best_i = 1e9, -1
         for i, (name, q) in enumerate(truth):
             if name == o.class_name and i not in matched and math.dist(p, q) < best:

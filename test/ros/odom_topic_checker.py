@@ -1,7 +1,10 @@
 #!/usr/bin/python3
-"""Replays a generated demo recording without its odom -> base_link TF (the head's transforms
-stay): the scene estimator takes the odometry from the bag's nav_msgs/Odometry topic
-(~odom_topic) and must still map the objects."""
+"""Replays a generated recording without its odom -> base_link TF (the head's transforms stay):
+the scene estimator takes the odometry from a nav_msgs/Odometry topic instead, the recording's
+own /odom (odometry:=topic) or the package's visual odometry (odometry:=visual), and must still
+map the objects. Private parameters: suite, scene, keyframes, odom_topic (waited for),
+odom_at_base (the odometry starts at the base, as the visual odometry's does, rather than at the
+recording's map origin)."""
 import os
 import shutil
 import subprocess
@@ -17,7 +20,6 @@ from geofusion.msg import ObjectMap
 import geofusion_test_utils as util
 
 NS = '/scene_estimator'
-KEYFRAMES = 20
 
 
 class OdomTopicTest(unittest.TestCase):
@@ -35,15 +37,20 @@ class OdomTopicTest(unittest.TestCase):
             self.maps.append(msg)
 
     def test_odometry_from_topic(self):
-        subprocess.check_call([util.find_tool('generate_dataset'), '--suite', 'demo', '--out-dir',
-                               self.dir, '--keyframes', str(KEYFRAMES), '--previews', '0'],
+        suite = rospy.get_param('~suite', 'demo')
+        scene = rospy.get_param('~scene', 'demo_01')
+        keyframes = int(rospy.get_param('~keyframes', 20))
+        odom_topic = rospy.get_param('~odom_topic', '/odom')
+        odom_at_base = rospy.get_param('~odom_at_base', False)
+        subprocess.check_call([util.find_tool('generate_dataset'), '--suite', suite, '--out-dir',
+                               self.dir, '--keyframes', str(keyframes), '--previews', '0'],
                               stdout=subprocess.DEVNULL)
-        bag = os.path.join(self.dir, 'demo_01.bag')
-        gt = util.load_yaml(os.path.join(self.dir, 'demo_01_gt.yaml'))
+        bag = os.path.join(self.dir, scene + '.bag')
+        gt = util.load_yaml(os.path.join(self.dir, scene + '_gt.yaml'))
         without = os.path.join(self.dir, 'without_odom_tf.bag')
         dropped = util.strip_tf(bag, without, 'odom')
         self.assertGreater(dropped, 0, 'the recording had no odom -> base_link on /tf')
-        self.assertTrue(util.wait_for_graph(util.INPUT_TOPICS + ['/odom'],
+        self.assertTrue(util.wait_for_graph(util.INPUT_TOPICS + [odom_topic],
                                             [NS + '/object_map']),
                         'the estimator did not come up')
         time.sleep(1.0)
@@ -51,8 +58,9 @@ class OdomTopicTest(unittest.TestCase):
         time.sleep(2.0)
         with self.lock:
             maps = list(self.maps)
-        self.assertGreaterEqual(len(maps), KEYFRAMES - 2, 'frames were skipped (no odometry?)')
-        matched, false = util.match_objects(maps[-1].objects, gt, 0.02)
+        self.assertGreaterEqual(len(maps), keyframes - 3, 'frames were skipped (no odometry?)')
+        frame = gt['frames'][0]['map_base'] if odom_at_base else None
+        matched, false = util.match_objects(maps[-1].objects, gt, 0.02, frame)
         self.assertEqual(false, 0)
         self.assertGreaterEqual(len(matched), len(gt['objects']) - 2)
 
