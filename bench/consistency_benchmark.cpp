@@ -9,6 +9,7 @@
 // rasterises in the calling thread (one core) unless LP_NUM_THREADS says otherwise.
 #include "geofusion/core/consistency.h"
 #include "geofusion/core/object_model.h"
+#include "geofusion/core/statistics.h"
 
 #include <sys/resource.h>
 
@@ -25,16 +26,6 @@
 #include <vector>
 
 using namespace geofusion;
-
-namespace {
-
-double percentile(std::vector<double> v, double p) {
-  std::sort(v.begin(), v.end());
-  const std::size_t i = std::min(v.size() - 1, static_cast<std::size_t>(p * (v.size() - 1) + 0.5));
-  return v[i];
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   std::string models_dir = std::string(GEOFUSION_SOURCE_DIR) + "/../shared/data/ycb_video";

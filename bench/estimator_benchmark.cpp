@@ -13,6 +13,7 @@
 #include "geofusion/core/metrics.h"
 #include "geofusion/core/renderer.h"
 #include "geofusion/core/scene_estimator.h"
+#include "geofusion/core/statistics.h"
 
 #include <sys/resource.h>
 
@@ -22,17 +23,6 @@
 #include <cstring>
 #include <string>
 #include <vector>
-
-namespace {
-
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const std::size_t i = std::min(v.size() - 1, static_cast<std::size_t>(p * (v.size() - 1) + 0.5));
-  return v[i];
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   using namespace geofusion;

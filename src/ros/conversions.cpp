@@ -98,6 +98,18 @@ bool depthToMetres(const sensor_msgs::Image& depth, std::vector<float>* metres) 
   return true;
 }
 
+geometry_msgs::Twist twistBetween(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to,
+                                  double dt) {
+  geometry_msgs::Twist t;
+  if (dt <= 0.0) return t;
+  const Eigen::Isometry3d delta = from.inverse() * to;
+  const Eigen::AngleAxisd rotation(delta.linear());
+  const Eigen::Vector3d v = delta.translation() / dt, w = rotation.angle() * rotation.axis() / dt;
+  t.linear.x = v.x(), t.linear.y = v.y(), t.linear.z = v.z();
+  t.angular.x = w.x(), t.angular.y = w.y(), t.angular.z = w.z();
+  return t;
+}
+
 bool toGray(const sensor_msgs::Image& image, std::vector<std::uint8_t>* gray, std::string* error) {
   if (image.width == 0 || image.height == 0 ||
       image.data.size() < static_cast<std::size_t>(image.step) * image.height) {

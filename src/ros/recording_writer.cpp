@@ -95,15 +95,7 @@ void RecordingWriter::writeOdometry(const ros::Time& stamp, const Eigen::Isometr
   msg.child_frame_id = layout_.base_frame;
   msg.pose.pose = toPoseMsg(T_odom_base);
   const double dt = have_previous_odom_ ? (stamp - previous_stamp_).toSec() : 0.0;
-  if (dt > 0.0) {
-    const Eigen::Isometry3d delta = previous_odom_.inverse() * T_odom_base;
-    const Eigen::AngleAxisd rotation(delta.linear());
-    const Eigen::Vector3d v = delta.translation() / dt, w = rotation.angle() * rotation.axis() / dt;
-    msg.twist.twist.linear.x = v.x(), msg.twist.twist.linear.y = v.y();
-    msg.twist.twist.linear.z = v.z();
-    msg.twist.twist.angular.x = w.x(), msg.twist.twist.angular.y = w.y();
-    msg.twist.twist.angular.z = w.z();
-  }
+  msg.twist.twist = twistBetween(previous_odom_, T_odom_base, dt);
   const double pose_var[6] = {kPoseVarianceXY, kPoseVarianceXY, kUnused,
                               kUnused,         kUnused,         kPoseVarianceYaw};
   const double twist_var[6] = {kTwistVarianceXY, kTwistVarianceXY, kUnused,

@@ -184,13 +184,7 @@ void VisualOdometryNode::onFrame(const sensor_msgs::ImageConstPtr& rgb,
   const double dt = have_last_ ? (stamp - last_stamp_).toSec() : 0.0;
   Matrix6d twist_cov = Matrix6d::Identity() * 1e3;
   if (have_last_ && !discontinuous && dt > 1e-4) {
-    const Eigen::Isometry3d step = T_last_odom_child_.inverse() * T_odom_child;
-    const Eigen::AngleAxisd aa(step.linear());
-    const Eigen::Vector3d v = step.translation() / dt, w = aa.axis() * aa.angle() / dt;
-    odom.twist.twist.linear.x = v.x(), odom.twist.twist.linear.y = v.y();
-    odom.twist.twist.linear.z = v.z();
-    odom.twist.twist.angular.x = w.x(), odom.twist.twist.angular.y = w.y();
-    odom.twist.twist.angular.z = w.z();
+    odom.twist.twist = twistBetween(T_last_odom_child_, T_odom_child, dt);
     twist_cov = 2.0 * r.frame_covariance / (dt * dt);
   }
   fill(twist_cov, &odom.twist.covariance);

@@ -7,6 +7,7 @@
 //       [--rgb-topic T] [--depth-topic T] [--camera-info-topic T] [--quiet]
 #include "command_line.h"
 #include "geofusion/core/dataset.h"
+#include "geofusion/core/statistics.h"
 #include "geofusion/core/trajectory_metrics.h"
 #include "geofusion/core/visual_odometry.h"
 #include "geofusion/ros/conversions.h"
@@ -74,13 +75,6 @@ Options parse(int argc, char** argv) {
     throw std::runtime_error("--bag and --ground-truth are required");
   if (o.threads < 1) throw std::runtime_error("--threads must be at least 1");
   return o;
-}
-
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const std::size_t i = std::min(v.size() - 1, static_cast<std::size_t>(p * (v.size() - 1) + 0.5));
-  return v[i];
 }
 
 }  // namespace

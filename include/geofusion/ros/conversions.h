@@ -7,6 +7,7 @@
 
 #include <geofusion/DetectionArray.h>
 #include <geometry_msgs/Pose.h>
+#include <geometry_msgs/Twist.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 
@@ -22,6 +23,9 @@ std::vector<RawDetection> fromMsg(const geofusion::DetectionArray& msg);
 
 geofusion::Detection toMsg(const RawDetection& detection);
 geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& T);
+/// Twist in the moving frame that takes `from` to `to` in `dt` seconds (zero for dt <= 0).
+geometry_msgs::Twist twistBetween(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to,
+                                  double dt);
 
 /// Why a depth image cannot be used (empty, encoding other than 32FC1 metres / 16UC1
 /// millimetres, data shorter than step * height), or nullptr.
