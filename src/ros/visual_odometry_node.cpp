@@ -172,7 +172,8 @@ void VisualOdometryNode::onFrame(const sensor_msgs::ImageConstPtr& rgb,
   // Covariance of the child pose: the camera's, moved along the lever arm camera -> child.
   Matrix6d J = Matrix6d::Identity();
   J.topRightCorner<3, 3>() = -skew(r.T_odom_cam.linear() * T_cam_child.translation());
-  const Matrix6d cov = J * r.covariance * J.transpose();
+  Matrix6d cov = J * r.covariance * J.transpose();
+  cov.diagonal().array() += 1e-9;  // never singular, even at the first frame that defines odom
 
   nav_msgs::Odometry odom;
   odom.header.stamp = stamp;
