@@ -1,32 +1,81 @@
-// Minimal command-line reading shared by the package's tools: flags in order, each flag's value.
+// Command-line reading shared by the package's tools: each tool declares its flags once (a
+// value flag writes its parsed value, a switch sets a bool, a custom one runs a function), then
+// parse() reads argv in order. Unknown flags, missing values and malformed numbers throw
+// std::runtime_error naming the flag; -h / --help makes parse() return false.
 #pragma once
 
+#include <functional>
+#include <map>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
+#include <utility>
 
 namespace geofusion {
 
 class CommandLine {
  public:
-  CommandLine(int argc, char** argv) : argc_(argc), argv_(argv) {}
-  /// The next argument (a flag), false at the end.
-  bool next(std::string* flag) {
-    if (i_ + 1 >= argc_) return false;
-    flag_ = argv_[++i_];
-    *flag = flag_;
-    return true;
+  void value(const std::string& flag, std::string* out) {
+    takes_value_[flag] = [out](const std::string& v) { *out = v; };
   }
-  /// The value after the current flag; throws when there is none.
-  std::string value() {
-    if (i_ + 1 >= argc_) throw std::runtime_error("missing value after " + flag_);
-    return argv_[++i_];
+  void value(const std::string& flag, int* out) {
+    takes_value_[flag] = [flag, out](const std::string& v) { *out = toNumber<int>(flag, v); };
+  }
+  void value(const std::string& flag, unsigned* out) {
+    takes_value_[flag] = [flag, out](const std::string& v) {
+      *out = static_cast<unsigned>(toNumber<long long>(flag, v));
+    };
+  }
+  void value(const std::string& flag, double* out) {
+    takes_value_[flag] = [flag, out](const std::string& v) { *out = toNumber<double>(flag, v); };
+  }
+  /// A flag with a value handled by `f` (e.g. a list to split).
+  void custom(const std::string& flag, std::function<void(const std::string&)> f) {
+    takes_value_[flag] = std::move(f);
+  }
+  /// A switch: its presence sets `*out` to `set_to`.
+  void toggle(const std::string& flag, bool* out, bool set_to = true) {
+    switches_[flag] = [out, set_to]() { *out = set_to; };
+  }
+
+  /// Reads argv[1..]; false when help was asked for.
+  bool parse(int argc, char** argv) const {
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      if (a == "-h" || a == "--help") return false;
+      if (const auto s = switches_.find(a); s != switches_.end()) {
+        s->second();
+      } else if (const auto v = takes_value_.find(a); v != takes_value_.end()) {
+        if (i + 1 >= argc) throw std::runtime_error("missing value after " + a);
+        v->second(argv[++i]);
+      } else {
+        throw std::runtime_error("unknown option " + a);
+      }
+    }
+    return true;
   }
 
  private:
-  int argc_;
-  char** argv_;
-  int i_ = 0;
-  std::string flag_;
+  template <typename T>
+  static T toNumber(const std::string& flag, const std::string& v) {
+    std::size_t used = 0;
+    T x{};
+    try {
+      if constexpr (std::is_same_v<T, double>) {
+        x = std::stod(v, &used);
+      } else {
+        x = static_cast<T>(std::stoll(v, &used));
+      }
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != v.size())
+      throw std::runtime_error(flag + " needs a number, not '" + v + "'");
+    return x;
+  }
+
+  std::map<std::string, std::function<void(const std::string&)>> takes_value_;
+  std::map<std::string, std::function<void()>> switches_;
 };
 
 }  // namespace geofusion

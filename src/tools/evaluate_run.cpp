@@ -15,6 +15,7 @@
 #include "model_set_option.h"
 
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <string>
 
@@ -33,26 +34,16 @@ void usage() {
 
 Options parse(int argc, char** argv) {
   Options o;
-  geofusion::CommandLine args(argc, argv);
-  std::string a;
-  while (args.next(&a)) {
-    if (a == "--ground-truth")
-      o.ground_truth = args.value();
-    else if (a == "--results")
-      o.results = args.value();
-    else if (a == "--json")
-      o.json = args.value();
-    else if (a == "--model-set")
-      o.model_set = args.value();
-    else if (a == "--models")
-      o.models_dir = args.value();
-    else if (a == "--quiet")
-      o.quiet = true;
-    else if (a == "-h" || a == "--help") {
-      usage();
-      std::exit(0);
-    } else
-      throw std::runtime_error("unknown option " + a);
+  geofusion::CommandLine args;
+  args.value("--ground-truth", &o.ground_truth);
+  args.value("--results", &o.results);
+  args.value("--json", &o.json);
+  args.value("--model-set", &o.model_set);
+  args.value("--models", &o.models_dir);
+  args.toggle("--quiet", &o.quiet);
+  if (!args.parse(argc, argv)) {
+    usage();
+    std::exit(0);
   }
   if (o.ground_truth.empty() || o.results.empty()) {
     throw std::runtime_error("--ground-truth and --results are required");

@@ -63,39 +63,22 @@ std::vector<std::string> split(const std::string& s) {
 
 Options parse(int argc, char** argv) {
   Options o;
-  geofusion::CommandLine args(argc, argv);
-  std::string a;
-  while (args.next(&a)) {
-    auto next = [&]() { return args.value(); };
-    if (a == "--suite")
-      o.suite = next();
-    else if (a == "--out-dir")
-      o.out_dir = next();
-    else if (a == "--models")
-      o.models_dir = next();
-    else if (a == "--model-set")
-      o.model_set_yaml = next();
-    else if (a == "--scenes")
-      o.scenes = split(next());
-    else if (a == "--keyframes")
-      o.keyframes = std::stoi(next());
-    else if (a == "--image-every")
-      o.image_every = std::stoi(next());
-    else if (a == "--detector")
-      o.detector = next();
-    else if (a == "--depth-encoding")
-      o.depth_encoding = next();
-    else if (a == "--no-compression")
-      o.compress = false;
-    else if (a == "--previews")
-      o.previews = std::stoi(next());
-    else if (a == "--force")
-      o.force = true;
-    else if (a == "-h" || a == "--help") {
-      usage();
-      std::exit(0);
-    } else
-      throw std::runtime_error("unknown option " + a);
+  geofusion::CommandLine args;
+  args.value("--suite", &o.suite);
+  args.value("--out-dir", &o.out_dir);
+  args.value("--models", &o.models_dir);
+  args.value("--model-set", &o.model_set_yaml);
+  args.custom("--scenes", [&o](const std::string& v) { o.scenes = split(v); });
+  args.value("--keyframes", &o.keyframes);
+  args.value("--image-every", &o.image_every);
+  args.value("--detector", &o.detector);
+  args.value("--depth-encoding", &o.depth_encoding);
+  args.toggle("--no-compression", &o.compress, false);
+  args.value("--previews", &o.previews);
+  args.toggle("--force", &o.force);
+  if (!args.parse(argc, argv)) {
+    usage();
+    std::exit(0);
   }
   if (o.suite.empty()) throw std::runtime_error("--suite is required");
   if (o.detector != "densefusion" && o.detector != "posecnn") {

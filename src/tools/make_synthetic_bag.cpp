@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <iostream>
@@ -44,33 +45,19 @@ void usage() {
 
 Options parse(int argc, char** argv) {
   Options o;
-  geofusion::CommandLine args(argc, argv);
-  std::string a;
-  while (args.next(&a)) {
-    auto next = [&]() { return args.value(); };
-    if (a == "--out")
-      o.out = next();
-    else if (a == "--ground-truth")
-      o.ground_truth = next();
-    else if (a == "--frames")
-      o.frames = std::stoi(next());
-    else if (a == "--rate")
-      o.rate_hz = std::stod(next());
-    else if (a == "--seed")
-      o.seed = static_cast<unsigned>(std::stoul(next()));
-    else if (a == "--malformed-every")
-      o.malformed_every = std::stoi(next());
-    else if (a == "--tf-until")
-      o.tf_until = std::stoi(next());
-    else if (a == "--depth-encoding")
-      o.depth_encoding = next();
-    else if (a == "--detection-stamp-offset")
-      o.detection_stamp_offset_s = std::stod(next());
-    else if (a == "-h" || a == "--help") {
-      usage();
-      std::exit(0);
-    } else
-      throw std::runtime_error("unknown option " + a);
+  geofusion::CommandLine args;
+  args.value("--out", &o.out);
+  args.value("--ground-truth", &o.ground_truth);
+  args.value("--frames", &o.frames);
+  args.value("--rate", &o.rate_hz);
+  args.value("--seed", &o.seed);
+  args.value("--malformed-every", &o.malformed_every);
+  args.value("--tf-until", &o.tf_until);
+  args.value("--depth-encoding", &o.depth_encoding);
+  args.value("--detection-stamp-offset", &o.detection_stamp_offset_s);
+  if (!args.parse(argc, argv)) {
+    usage();
+    std::exit(0);
   }
   if (o.out.empty()) throw std::runtime_error("--out is required");
   if (o.frames < 1 || o.rate_hz <= 0) throw std::runtime_error("--frames and --rate must be > 0");

@@ -56,38 +56,22 @@ void usage() {
 
 Options parse(int argc, char** argv) {
   Options o;
-  geofusion::CommandLine args(argc, argv);
-  std::string a;
-  while (args.next(&a)) {
-    if (a == "--bag")
-      o.bag = args.value();
-    else if (a == "--out")
-      o.out = args.value();
-    else if (a == "--method")
-      o.method = args.value();
-    else if (a == "--model-set")
-      o.model_set = args.value();
-    else if (a == "--models")
-      o.models_dir = args.value();
-    else if (a == "--keyframe-every")
-      o.keyframe_every = std::stoi(args.value());
-    else if (a == "--depth-topic")
-      o.depth_topic = args.value();
-    else if (a == "--camera-info-topic")
-      o.info_topic = args.value();
-    else if (a == "--detections-topic")
-      o.detections_topic = args.value();
-    else if (a == "--odom-frame")
-      o.odom_frame = args.value();
-    else if (a == "--background")
-      o.background = args.value();
-    else if (a == "--quiet")
-      o.quiet = true;
-    else if (a == "-h" || a == "--help") {
-      usage();
-      std::exit(0);
-    } else
-      throw std::runtime_error("unknown option " + a);
+  geofusion::CommandLine args;
+  args.value("--bag", &o.bag);
+  args.value("--out", &o.out);
+  args.value("--method", &o.method);
+  args.value("--model-set", &o.model_set);
+  args.value("--models", &o.models_dir);
+  args.value("--keyframe-every", &o.keyframe_every);
+  args.value("--depth-topic", &o.depth_topic);
+  args.value("--camera-info-topic", &o.info_topic);
+  args.value("--detections-topic", &o.detections_topic);
+  args.value("--odom-frame", &o.odom_frame);
+  args.value("--background", &o.background);
+  args.toggle("--quiet", &o.quiet);
+  if (!args.parse(argc, argv)) {
+    usage();
+    std::exit(0);
   }
   if (o.bag.empty() || o.out.empty()) throw std::runtime_error("--bag and --out are required");
   if (o.keyframe_every < 1) throw std::runtime_error("--keyframe-every must be >= 1");

@@ -21,6 +21,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -47,29 +48,18 @@ void usage() {
 
 Options parse(int argc, char** argv) {
   Options o;
-  geofusion::CommandLine args(argc, argv);
-  std::string a;
-  while (args.next(&a)) {
-    if (a == "--bag")
-      o.bag = args.value();
-    else if (a == "--ground-truth")
-      o.ground_truth = args.value();
-    else if (a == "--out-dir")
-      o.out_dir = args.value();
-    else if (a == "--threads")
-      o.threads = std::stoi(args.value());
-    else if (a == "--rgb-topic")
-      o.rgb_topic = args.value();
-    else if (a == "--depth-topic")
-      o.depth_topic = args.value();
-    else if (a == "--camera-info-topic")
-      o.info_topic = args.value();
-    else if (a == "--quiet")
-      o.quiet = true;
-    else if (a == "-h" || a == "--help")
-      throw std::runtime_error("");
-    else
-      throw std::runtime_error("unknown option " + a);
+  geofusion::CommandLine args;
+  args.value("--bag", &o.bag);
+  args.value("--ground-truth", &o.ground_truth);
+  args.value("--out-dir", &o.out_dir);
+  args.value("--threads", &o.threads);
+  args.value("--rgb-topic", &o.rgb_topic);
+  args.value("--depth-topic", &o.depth_topic);
+  args.value("--camera-info-topic", &o.info_topic);
+  args.toggle("--quiet", &o.quiet);
+  if (!args.parse(argc, argv)) {
+    usage();
+    std::exit(0);
   }
   if (o.bag.empty() || o.ground_truth.empty())
     throw std::runtime_error("--bag and --ground-truth are required");
@@ -85,7 +75,7 @@ int main(int argc, char** argv) {
   try {
     opt = parse(argc, argv);
   } catch (const std::exception& e) {
-    if (*e.what()) std::cerr << "vo_benchmark: " << e.what() << "\n";
+    std::cerr << "vo_benchmark: " << e.what() << "\n";
     usage();
     return 2;
   }
