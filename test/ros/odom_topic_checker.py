@@ -2,7 +2,8 @@
 """Replays a generated recording without its odom -> base_link TF (the head's transforms stay):
 the scene estimator takes the odometry from a nav_msgs/Odometry topic instead, the recording's
 own /odom (odometry:=topic) or the package's visual odometry (odometry:=visual), and must still
-map the objects. Private parameters: suite, scene, keyframes, odom_topic (waited for),
+map the objects. Private parameters: suite, scene, keyframes, rate (of the replay), odom_topic
+(waited for),
 odom_at_base (the odometry starts at the base, as the visual odometry's does, rather than at the
 recording's map origin)."""
 import os
@@ -42,6 +43,7 @@ class OdomTopicTest(unittest.TestCase):
         keyframes = int(rospy.get_param('~keyframes', 20))
         odom_topic = rospy.get_param('~odom_topic', '/odom')
         odom_at_base = rospy.get_param('~odom_at_base', False)
+        rate = float(rospy.get_param('~rate', 1.0))
         subprocess.check_call([util.find_tool('generate_dataset'), '--suite', suite, '--out-dir',
                                self.dir, '--keyframes', str(keyframes), '--previews', '0'],
                               stdout=subprocess.DEVNULL)
@@ -54,11 +56,14 @@ class OdomTopicTest(unittest.TestCase):
                                             [NS + '/object_map']),
                         'the estimator did not come up')
         time.sleep(1.0)
-        util.play(without, rate=1.0)
+        util.play(without, rate=rate)
         time.sleep(2.0)
         with self.lock:
             maps = list(self.maps)
-        self.assertGreaterEqual(len(maps), keyframes - 3, 'frames were skipped (no odometry?)')
+        # A frame without odometry is skipped with a warning; at 30 Hz a busy machine may also
+        # drop a few sets in the synchroniser, hence the margin.
+        self.assertGreaterEqual(len(maps), int(0.85 * keyframes),
+                                'frames were skipped (no odometry?)')
         frame = gt['frames'][0]['map_base'] if odom_at_base else None
         matched, false = util.match_objects(maps[-1].objects, gt, 0.02, frame)
         self.assertEqual(false, 0)
