@@ -114,8 +114,8 @@ struct ReprojectionCost {
 
 struct VoKeyframe {
   Eigen::Isometry3d T_odom_cam = Eigen::Isometry3d::Identity();
-  mrpt::poses::CPose3DPDFGaussian pdf;
-  std::vector<Eigen::Vector3d> points;  ///< odom frame, one per descriptor row
+  Matrix6d covariance = Matrix6d::Zero();  ///< of T_odom_cam, MRPT order
+  std::vector<Eigen::Vector3d> points;     ///< odom frame, one per descriptor row
   cv::Mat descriptors;
   int baseline_tracked = -1;  ///< inliers of the first frame tracked after it
 };
@@ -136,7 +136,6 @@ struct VisualOdometry::Impl {
   cv::Mat map_descriptors;
 
   TrackingState state = TrackingState::kNotStarted;
-  bool ever_started = false;
   int lost_frames = 0;
   Eigen::Isometry3d T_last = Eigen::Isometry3d::Identity(), T_prev = Eigen::Isometry3d::Identity();
   bool have_velocity = false;
@@ -168,9 +167,8 @@ struct VisualOdometry::Impl {
                    const std::vector<Eigen::Vector3d>& pts_cam, const std::vector<char>& has3d) {
     VoKeyframe kf;
     kf.T_odom_cam = T;
-    Matrix6d c = cov_mrpt;
-    c.diagonal().array() += 1e-12;  // keep it positive definite
-    kf.pdf = mrpt::poses::CPose3DPDFGaussian(toMrpt(T), toMrptMatrix(c));
+    kf.covariance = cov_mrpt;
+    kf.covariance.diagonal().array() += 1e-12;  // keep it positive definite
     std::vector<int> rows;
     for (std::size_t i = 0; i < kps.size(); ++i) {
       if (!has3d[i]) continue;
@@ -210,7 +208,6 @@ void VisualOdometry::reset(const Eigen::Isometry3d& T_odom_cam) {
   s.keyframes.clear();
   s.rebuildLocalMap();
   s.state = TrackingState::kNotStarted;
-  s.ever_started = false;
   s.lost_frames = 0;
   s.have_velocity = false;
   s.T_last = s.T_prev = s.T_anchor = T_odom_cam;
@@ -335,7 +332,6 @@ VoFrameResult VisualOdometry::track(const GrayImageView& gray, const DepthImageV
     s.T_last = s.T_prev = s.T_anchor;
     s.have_velocity = false;
     s.state = TrackingState::kTracking;
-    s.ever_started = true;
     s.lost_frames = 0;
     s.last_stamp = stamp_s;
     return finish(out);
@@ -589,7 +585,8 @@ VoFrameResult VisualOdometry::track(const GrayImageView& gray, const DepthImageV
       c.pixel_sigma * c.pixel_sigma * (H + 1e-9 * Matrix6d::Identity()).inverse();
   const mrpt::poses::CPose3DPDFGaussian rel(toMrpt(T_rel),
                                             toMrptMatrix(toMrptCovariance(T_rel, cov_right)));
-  const mrpt::poses::CPose3DPDFGaussian pdf = kref.pdf + rel;
+  const mrpt::poses::CPose3DPDFGaussian pdf =
+      mrpt::poses::CPose3DPDFGaussian(toMrpt(kref.T_odom_cam), toMrptMatrix(kref.covariance)) + rel;
   s.last_cov = fromMrpt(pdf.cov);
 
   out.pose_valid = true;

@@ -98,6 +98,12 @@ bool depthToMetres(const sensor_msgs::Image& depth, std::vector<float>* metres) 
   return true;
 }
 
+geometry_msgs::Point toPointMsg(const Eigen::Vector3d& p) {
+  geometry_msgs::Point out;
+  out.x = p.x(), out.y = p.y(), out.z = p.z();
+  return out;
+}
+
 geometry_msgs::Twist twistBetween(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to,
                                   double dt) {
   geometry_msgs::Twist t;

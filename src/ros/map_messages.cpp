@@ -2,6 +2,7 @@
 
 #include "geofusion/core/class_palette.h"
 #include "geofusion/ros/conversions.h"
+#include "geofusion/ros/markers.h"
 
 #include <sensor_msgs/point_cloud2_iterator.h>
 
@@ -18,12 +19,6 @@ Eigen::Vector3d featureCentre(const ObjectModel& model, const FeatureRef& f,
   if (!f.plane && f.index >= 0 && f.index < static_cast<int>(model.features.curves.size()))
     return T * model.features.curves[static_cast<std::size_t>(f.index)].center;
   return T.translation();
-}
-
-geometry_msgs::Point point(const Eigen::Vector3d& p) {
-  geometry_msgs::Point out;
-  out.x = p.x(), out.y = p.y(), out.z = p.z();
-  return out;
 }
 
 // Contact endpoints in the map frame; index -1 is the support plane.
@@ -106,8 +101,8 @@ geofusion::ObjectMap toObjectMapMsg(const KeyframeResult& r, const SupportPlane&
     cr.feature_b_type = c.feature_b.plane ? geofusion::ContactRelation::FEATURE_PLANE
                                           : geofusion::ContactRelation::FEATURE_CURVE;
     cr.a_supports_b = c.support;
-    cr.point_a = point(a);
-    cr.point_b = point(b);
+    cr.point_a = toPointMsg(a);
+    cr.point_b = toPointMsg(b);
     cr.distance_residual_m = static_cast<float>(c.distance_residual);
     cr.direction_residual = static_cast<float>(c.direction_residual);
     msg.contacts.push_back(cr);
@@ -124,18 +119,11 @@ visualization_msgs::MarkerArray mapMarkers(const KeyframeResult& r, const Suppor
                                            const std_msgs::Header& header) {
   using visualization_msgs::Marker;
   visualization_msgs::MarkerArray out;
-  Marker clear;
-  clear.header = header;
-  clear.action = Marker::DELETEALL;
-  out.markers.push_back(clear);
+  out.markers.push_back(deleteAllMarker(header));
   for (const ObjectEstimate& o : r.objects) {
     if (!o.model) continue;
     const Rgb colour = classColor(o.model->name);
-    Marker m;
-    m.header = header;
-    m.ns = kObjectNs;
-    m.id = static_cast<int>(messageId(o.id));
-    m.action = Marker::ADD;
+    Marker m = makeMarker(header, kObjectNs, static_cast<int>(messageId(o.id)), Marker::CUBE);
     m.pose = toPoseMsg(o.T_map_obj);
     m.color.r = colour.r, m.color.g = colour.g, m.color.b = colour.b;
     m.color.a = static_cast<float>(0.4 + 0.5 * o.existence);
@@ -171,33 +159,19 @@ visualization_msgs::MarkerArray mapMarkers(const KeyframeResult& r, const Suppor
   Eigen::Isometry3d T_plane = Eigen::Isometry3d::Identity();
   const auto plane_model = plane.valid ? supportPlaneModel(plane, &T_plane) : nullptr;
   int contact_id = 0;
-  Marker links;
-  links.header = header;
-  links.ns = kContactLinkNs;
-  links.id = 0;
-  links.type = Marker::LINE_LIST;
-  links.action = Marker::ADD;
-  links.pose.orientation.w = 1.0;
+  Marker links = makeMarker(header, kContactLinkNs, 0, Marker::LINE_LIST);
   links.scale.x = 0.004;
   for (const FeatureContact& c : r.contacts) {
     Eigen::Vector3d a, b;
     if (!contactPoints(r, c, plane_model.get(), T_plane, &a, &b)) continue;
     // P2P magenta, P2C green, C2C cyan.
-    std_msgs::ColorRGBA colour;
-    colour.r = c.type == ContactType::kPlanePlane ? 1.0f : 0.1f;
-    colour.g = c.type == ContactType::kPlanePlane ? 0.1f : 1.0f;
-    colour.b = c.type == ContactType::kPlaneCurve ? 0.1f : 1.0f;
-    colour.a = 1.0f;
-    Marker arrow;
-    arrow.header = header;
-    arrow.ns = kContactNs;
-    arrow.id = contact_id++;
-    arrow.type = Marker::ARROW;
-    arrow.action = Marker::ADD;
-    arrow.pose.orientation.w = 1.0;
+    const std_msgs::ColorRGBA colour = colorMsg(c.type == ContactType::kPlanePlane ? 1.0f : 0.1f,
+                                                c.type == ContactType::kPlanePlane ? 0.1f : 1.0f,
+                                                c.type == ContactType::kPlaneCurve ? 0.1f : 1.0f);
+    Marker arrow = makeMarker(header, kContactNs, contact_id++, Marker::ARROW);
     // An arrow along the contact normal (the support direction for support contacts), ending
     // at the supported feature: it sits where the objects touch and points up into what rests.
-    arrow.points = {point(b - 0.06 * c.normal), point(b)};
+    arrow.points = {toPointMsg(b - 0.06 * c.normal), toPointMsg(b)};
     arrow.scale.x = 0.008, arrow.scale.y = 0.018, arrow.scale.z = 0.02;
     arrow.color = colour;
     out.markers.push_back(arrow);
@@ -209,19 +183,14 @@ visualization_msgs::MarkerArray mapMarkers(const KeyframeResult& r, const Suppor
                              r.objects[static_cast<std::size_t>(index)].T_map_obj.translation());
     };
     const Eigen::Vector3d from = centre(c.object_a, b), to = centre(c.object_b, a);
-    links.points.push_back(point(from));
-    links.points.push_back(point(to));
+    links.points.push_back(toPointMsg(from));
+    links.points.push_back(toPointMsg(to));
     links.colors.push_back(colour);
     links.colors.push_back(colour);
   }
   if (!links.points.empty()) out.markers.push_back(links);
   if (plane_model) {
-    Marker table;
-    table.header = header;
-    table.ns = kSupportPlaneNs;
-    table.id = 0;
-    table.type = Marker::CUBE;
-    table.action = Marker::ADD;
+    Marker table = makeMarker(header, kSupportPlaneNs, 0, Marker::CUBE);
     table.pose = toPoseMsg(T_plane);
     table.scale.x = plane_model->extents.x();
     table.scale.y = plane_model->extents.y();
@@ -236,23 +205,17 @@ visualization_msgs::MarkerArray backgroundMarkers(const std::vector<Eigen::Vecto
                                                   double resolution_m,
                                                   const std_msgs::Header& header) {
   visualization_msgs::MarkerArray out;
-  visualization_msgs::Marker m;
-  m.header = header;
-  m.ns = "background";
-  m.id = 0;
-  m.type = visualization_msgs::Marker::CUBE_LIST;
-  m.action = centres.empty() ? visualization_msgs::Marker::DELETE : visualization_msgs::Marker::ADD;
-  m.pose.orientation.w = 1.0;
+  visualization_msgs::Marker m =
+      makeMarker(header, "background", 0, visualization_msgs::Marker::CUBE_LIST);
+  if (centres.empty()) m.action = visualization_msgs::Marker::DELETE;
   m.scale.x = m.scale.y = m.scale.z = resolution_m;
   double lo = 1e9, hi = -1e9;
   for (const auto& c : centres) lo = std::min(lo, c.z()), hi = std::max(hi, c.z());
   for (const auto& c : centres) {
-    m.points.push_back(point(c));
+    m.points.push_back(toPointMsg(c));
     const double t = hi > lo ? (c.z() - lo) / (hi - lo) : 0.5;
     const Rgb rgb = hsvToRgb(0.66 * (1.0 - t), 0.8, 0.9);  // blue low, red high
-    std_msgs::ColorRGBA colour;
-    colour.r = rgb.r, colour.g = rgb.g, colour.b = rgb.b, colour.a = 1.0f;
-    m.colors.push_back(colour);
+    m.colors.push_back(colorMsg(rgb.r, rgb.g, rgb.b));
   }
   out.markers.push_back(m);
   return out;

@@ -7,8 +7,7 @@
 
 namespace geofusion {
 
-namespace {
-std_msgs::ColorRGBA color(float r, float g, float b, float a = 1.f) {
+std_msgs::ColorRGBA colorMsg(float r, float g, float b, float a) {
   std_msgs::ColorRGBA c;
   c.r = r;
   c.g = g;
@@ -29,23 +28,18 @@ visualization_msgs::Marker makeMarker(const std_msgs::Header& header, const char
   return m;
 }
 
-geometry_msgs::Point point(const Eigen::Vector3d& p) {
-  geometry_msgs::Point q;
-  q.x = p.x();
-  q.y = p.y();
-  q.z = p.z();
-  return q;
+visualization_msgs::Marker deleteAllMarker(const std_msgs::Header& header) {
+  visualization_msgs::Marker clear;
+  clear.header = header;
+  clear.action = visualization_msgs::Marker::DELETEALL;
+  return clear;
 }
-}  // namespace
 
 visualization_msgs::MarkerArray detectionMarkers(const std::vector<WorldDetection>& detections,
                                                  const std_msgs::Header& header,
                                                  double axis_length_m) {
   visualization_msgs::MarkerArray out;
-  visualization_msgs::Marker clear;
-  clear.header = header;
-  clear.action = visualization_msgs::Marker::DELETEALL;
-  out.markers.push_back(clear);
+  out.markers.push_back(deleteAllMarker(header));
 
   for (std::size_t i = 0; i < detections.size(); ++i) {
     const WorldDetection& d = detections[i];
@@ -56,17 +50,18 @@ visualization_msgs::MarkerArray detectionMarkers(const std::vector<WorldDetectio
         makeMarker(header, kDetectionNs, id, visualization_msgs::Marker::SPHERE);
     sphere.pose = toPoseMsg(d.T_world_obj);
     sphere.scale.x = sphere.scale.y = sphere.scale.z = 0.4 * axis_length_m;
-    sphere.color = color(rgb.r, rgb.g, rgb.b, 0.9f);
+    sphere.color = colorMsg(rgb.r, rgb.g, rgb.b, 0.9f);
     out.markers.push_back(sphere);
 
     visualization_msgs::Marker axes =
         makeMarker(header, kDetectionAxesNs, id, visualization_msgs::Marker::LINE_LIST);
     axes.pose = toPoseMsg(d.T_world_obj);
     axes.scale.x = 0.08 * axis_length_m;  // line width
-    const std_msgs::ColorRGBA axis_colors[3] = {color(1, 0, 0), color(0, 1, 0), color(0, 0, 1)};
+    const std_msgs::ColorRGBA axis_colors[3] = {colorMsg(1, 0, 0), colorMsg(0, 1, 0),
+                                                colorMsg(0, 0, 1)};
     for (int a = 0; a < 3; ++a) {
-      axes.points.push_back(point(Eigen::Vector3d::Zero()));
-      axes.points.push_back(point(axis_length_m * Eigen::Vector3d::Unit(a)));
+      axes.points.push_back(toPointMsg(Eigen::Vector3d::Zero()));
+      axes.points.push_back(toPointMsg(axis_length_m * Eigen::Vector3d::Unit(a)));
       axes.colors.push_back(axis_colors[a]);
       axes.colors.push_back(axis_colors[a]);
     }
@@ -75,9 +70,9 @@ visualization_msgs::MarkerArray detectionMarkers(const std::vector<WorldDetectio
     visualization_msgs::Marker label =
         makeMarker(header, kDetectionLabelNs, id, visualization_msgs::Marker::TEXT_VIEW_FACING);
     label.pose.position =
-        point(d.T_world_obj.translation() + Eigen::Vector3d(0, 0, 1.5 * axis_length_m));
+        toPointMsg(d.T_world_obj.translation() + Eigen::Vector3d(0, 0, 1.5 * axis_length_m));
     label.scale.z = 0.5 * axis_length_m;
-    label.color = color(1, 1, 1);
+    label.color = colorMsg(1, 1, 1);
     char text[128];
     std::snprintf(text, sizeof(text), "%s %.2f", d.measurement.class_name.c_str(),
                   d.measurement.score);

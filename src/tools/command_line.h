@@ -1,9 +1,10 @@
 // Command-line reading shared by the package's tools: each tool declares its flags once (a
 // value flag writes its parsed value, a switch sets a bool, a custom one runs a function), then
 // parse() reads argv in order. Unknown flags, missing values and malformed numbers throw
-// std::runtime_error naming the flag; -h / --help makes parse() return false.
+// std::runtime_error naming the flag; -h / --help prints the tool's usage and exits 0.
 #pragma once
 
+#include <cstdlib>
 #include <functional>
 #include <map>
 #include <stdexcept>
@@ -38,11 +39,14 @@ class CommandLine {
     switches_[flag] = [out, set_to]() { *out = set_to; };
   }
 
-  /// Reads argv[1..]; false when help was asked for.
-  bool parse(int argc, char** argv) const {
+  /// Reads argv[1..]; on -h / --help calls `usage` and exits with 0.
+  void parse(int argc, char** argv, void (*usage)()) const {
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
-      if (a == "-h" || a == "--help") return false;
+      if (a == "-h" || a == "--help") {
+        usage();
+        std::exit(0);
+      }
       if (const auto s = switches_.find(a); s != switches_.end()) {
         s->second();
       } else if (const auto v = takes_value_.find(a); v != takes_value_.end()) {
@@ -52,7 +56,6 @@ class CommandLine {
         throw std::runtime_error("unknown option " + a);
       }
     }
-    return true;
   }
 
  private:

@@ -15,7 +15,6 @@
 #include "model_set_option.h"
 
 #include <cstdio>
-#include <cstdlib>
 #include <iostream>
 #include <string>
 
@@ -41,34 +40,11 @@ Options parse(int argc, char** argv) {
   args.value("--model-set", &o.model_set);
   args.value("--models", &o.models_dir);
   args.toggle("--quiet", &o.quiet);
-  if (!args.parse(argc, argv)) {
-    usage();
-    std::exit(0);
-  }
+  args.parse(argc, argv, usage);
   if (o.ground_truth.empty() || o.results.empty()) {
     throw std::runtime_error("--ground-truth and --results are required");
   }
   return o;
-}
-
-// The model set a ground-truth file names, from its header line (the file is read again with
-// the models for its classes).
-std::string modelSetOf(const std::string& gt_path) {
-  std::FILE* f = std::fopen(gt_path.c_str(), "r");
-  if (!f) return "primitives";
-  char line[512];
-  std::string set = "primitives";
-  while (std::fgets(line, sizeof(line), f)) {
-    const std::string s(line);
-    if (s.rfind("model_set:", 0) == 0) {
-      set = s.substr(10);
-      set.erase(0, set.find_first_not_of(" \"'"));
-      set.erase(set.find_last_not_of(" \"'\r\n") + 1);
-      break;
-    }
-  }
-  std::fclose(f);
-  return set;
 }
 
 }  // namespace

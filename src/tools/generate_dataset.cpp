@@ -76,10 +76,7 @@ Options parse(int argc, char** argv) {
   args.toggle("--no-compression", &o.compress, false);
   args.value("--previews", &o.previews);
   args.toggle("--force", &o.force);
-  if (!args.parse(argc, argv)) {
-    usage();
-    std::exit(0);
-  }
+  args.parse(argc, argv, usage);
   if (o.suite.empty()) throw std::runtime_error("--suite is required");
   if (o.detector != "densefusion" && o.detector != "posecnn") {
     throw std::runtime_error("--detector must be densefusion or posecnn");

@@ -13,7 +13,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <iostream>
@@ -55,10 +54,7 @@ Options parse(int argc, char** argv) {
   args.value("--tf-until", &o.tf_until);
   args.value("--depth-encoding", &o.depth_encoding);
   args.value("--detection-stamp-offset", &o.detection_stamp_offset_s);
-  if (!args.parse(argc, argv)) {
-    usage();
-    std::exit(0);
-  }
+  args.parse(argc, argv, usage);
   if (o.out.empty()) throw std::runtime_error("--out is required");
   if (o.frames < 1 || o.rate_hz <= 0) throw std::runtime_error("--frames and --rate must be > 0");
   if (o.depth_encoding != "32FC1" && o.depth_encoding != "16UC1") {

@@ -5,6 +5,7 @@
 
 #include "geofusion/ros/estimator_pipeline.h"
 
+#include <cstdio>
 #include <cstdlib>
 #include <iostream>
 #include <string>
@@ -34,6 +35,26 @@ inline bool loadModelSetOption(const std::string& tool, std::string spec, std::s
   }
   for (const auto& e : errors) std::cerr << tool << ": warning: " << e << "\n";
   return true;
+}
+
+// The model set a ground-truth file names, from its header line (the file is read again with
+// the models for its classes).
+inline std::string modelSetOf(const std::string& gt_path) {
+  std::FILE* f = std::fopen(gt_path.c_str(), "r");
+  if (!f) return "primitives";
+  char line[512];
+  std::string set = "primitives";
+  while (std::fgets(line, sizeof(line), f)) {
+    const std::string s(line);
+    if (s.rfind("model_set:", 0) == 0) {
+      set = s.substr(10);
+      set.erase(0, set.find_first_not_of(" \"'"));
+      set.erase(set.find_last_not_of(" \"'\r\n") + 1);
+      break;
+    }
+  }
+  std::fclose(f);
+  return set;
 }
 
 }  // namespace geofusion

@@ -69,10 +69,7 @@ Options parse(int argc, char** argv) {
   args.value("--odom-frame", &o.odom_frame);
   args.value("--background", &o.background);
   args.toggle("--quiet", &o.quiet);
-  if (!args.parse(argc, argv)) {
-    usage();
-    std::exit(0);
-  }
+  args.parse(argc, argv, usage);
   if (o.bag.empty() || o.out.empty()) throw std::runtime_error("--bag and --out are required");
   if (o.keyframe_every < 1) throw std::runtime_error("--keyframe-every must be >= 1");
   return o;

@@ -11,6 +11,7 @@
 #include "geofusion/core/trajectory_metrics.h"
 #include "geofusion/core/visual_odometry.h"
 #include "geofusion/ros/conversions.h"
+#include "model_set_option.h"
 
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
@@ -22,7 +23,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -58,10 +58,7 @@ Options parse(int argc, char** argv) {
   args.value("--depth-topic", &o.depth_topic);
   args.value("--camera-info-topic", &o.info_topic);
   args.toggle("--quiet", &o.quiet);
-  if (!args.parse(argc, argv)) {
-    usage();
-    std::exit(0);
-  }
+  args.parse(argc, argv, usage);
   if (o.bag.empty() || o.ground_truth.empty())
     throw std::runtime_error("--bag and --ground-truth are required");
   if (o.threads < 1) throw std::runtime_error("--threads must be at least 1");
@@ -83,9 +80,11 @@ int main(int argc, char** argv) {
   cv::setNumThreads(opt.threads);
   GroundTruth gt;
   std::string error;
-  // Only the camera trajectory is used: the built-in primitives resolve the demo-style suites'
-  // classes; any other model set's objects are not needed (read failures name the file).
-  if (!readGroundTruth(opt.ground_truth, ModelSet::builtinPrimitives(), &gt, &error)) {
+  // Only the camera trajectory is used, but reading the file resolves its classes: the model
+  // set it names (YCB-Video meshes from $GEOFUSION_YCB_DIR or ../shared, as evaluate_run).
+  ModelSet models;
+  if (!loadModelSetOption("vo_benchmark", modelSetOf(opt.ground_truth), "", &models)) return 1;
+  if (!readGroundTruth(opt.ground_truth, models, &gt, &error)) {
     std::cerr << "vo_benchmark: " << error << "\n";
     return 1;
   }

@@ -6,6 +6,7 @@
 #include "geofusion/core/camera.h"
 
 #include <geofusion/DetectionArray.h>
+#include <geometry_msgs/Point.h>
 #include <geometry_msgs/Pose.h>
 #include <geometry_msgs/Twist.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -23,6 +24,7 @@ std::vector<RawDetection> fromMsg(const geofusion::DetectionArray& msg);
 
 geofusion::Detection toMsg(const RawDetection& detection);
 geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& T);
+geometry_msgs::Point toPointMsg(const Eigen::Vector3d& p);
 /// Twist in the moving frame that takes `from` to `to` in `dt` seconds (zero for dt <= 0).
 geometry_msgs::Twist twistBetween(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to,
                                   double dt);

@@ -10,6 +10,13 @@
 
 namespace geofusion {
 
+/// A marker to ADD: header, namespace, id, type, identity orientation.
+visualization_msgs::Marker makeMarker(const std_msgs::Header& header, const char* ns, int id,
+                                      int type);
+std_msgs::ColorRGBA colorMsg(float r, float g, float b, float a = 1.f);
+/// The DELETEALL that starts every marker array of a view (nothing from the last one lingers).
+visualization_msgs::Marker deleteAllMarker(const std_msgs::Header& header);
+
 /// Marker namespaces of the frame-by-frame view.
 constexpr const char* kDetectionNs = "detections";             ///< SPHERE at each object origin
 constexpr const char* kDetectionAxesNs = "detection_axes";     ///< LINE_LIST x/y/z axes (r/g/b)
