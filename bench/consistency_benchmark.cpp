@@ -7,9 +7,9 @@
 // DIR holds the YCB-Video models (default: ../shared/data/ycb_video beside the source tree);
 // without it the built-in primitive models are used and the output says so. The renderer
 // rasterises in the calling thread (one core) unless LP_NUM_THREADS says otherwise.
-#include "geofusion/core/consistency.h"
-#include "geofusion/core/object_model.h"
-#include "geofusion/core/statistics.h"
+#include "geofusion/common/statistics.h"
+#include "geofusion/model/object_model.h"
+#include "geofusion/render/consistency.h"
 
 #include <sys/resource.h>
 

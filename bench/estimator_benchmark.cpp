@@ -8,12 +8,13 @@
 //
 // DIR holds the YCB-Video models (default ../shared/data/ycb_video beside the source tree);
 // without them the built-in primitives are used and the output says so.
-#include "geofusion/core/dataset.h"
-#include "geofusion/core/evaluation.h"
-#include "geofusion/core/metrics.h"
-#include "geofusion/core/renderer.h"
-#include "geofusion/core/scene_estimator.h"
-#include "geofusion/core/statistics.h"
+#include "geofusion/common/statistics.h"
+#include "geofusion/estimation/scene_estimator.h"
+#include "geofusion/evaluation/evaluation.h"
+#include "geofusion/evaluation/metrics.h"
+#include "geofusion/evaluation/sequence_calibration.h"
+#include "geofusion/render/renderer.h"
+#include "geofusion/simulation/dataset.h"
 
 #include <sys/resource.h>
 

@@ -1,25 +1,11 @@
 #include "geofusion/ros/estimator_pipeline.h"
 
-#include "geofusion/core/renderer.h"
+#include "geofusion/render/renderer.h"
 #include "geofusion/ros/conversions.h"
 
 #include <chrono>
 
 namespace geofusion {
-
-bool loadModelSet(const std::string& spec, const std::string& models_dir, ModelSet* models,
-                  std::vector<std::string>* errors) {
-  if (spec == "primitives" || spec.empty()) {
-    *models = ModelSet::builtinPrimitives();
-    return true;
-  }
-  if (!ModelSet::load(spec, models_dir, models, errors)) return false;
-  if (models->size() == 0) {
-    errors->push_back("model set '" + spec + "' has no loadable class");
-    return false;
-  }
-  return true;
-}
 
 EstimatorPipeline::EstimatorPipeline(const ModelSet& models, const EstimatorConfig& estimator,
                                      const KeyframeSelectorConfig& keyframes,

@@ -1,6 +1,6 @@
 #include "geofusion/ros/map_messages.h"
 
-#include "geofusion/core/class_palette.h"
+#include "geofusion/common/class_palette.h"
 #include "geofusion/ros/conversions.h"
 #include "geofusion/ros/markers.h"
 

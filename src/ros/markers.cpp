@@ -1,6 +1,6 @@
 #include "geofusion/ros/markers.h"
 
-#include "geofusion/core/class_palette.h"
+#include "geofusion/common/class_palette.h"
 #include "geofusion/ros/conversions.h"
 
 #include <cstdio>

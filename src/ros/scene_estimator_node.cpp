@@ -1,6 +1,6 @@
 #include "geofusion/ros/scene_estimator_node.h"
 
-#include "geofusion/core/run_results.h"
+#include "geofusion/estimation/run_results.h"
 #include "geofusion/ros/conversions.h"
 #include "geofusion/ros/map_messages.h"
 #include "geofusion/ros/params.h"
@@ -195,6 +195,7 @@ void SceneEstimatorNode::onFrame(const sensor_msgs::ImageConstPtr& /*rgb*/,
     if (outcome != EstimatorPipeline::Outcome::kKeyframe) return;
     ++keyframes_;
     last_ = result;
+    reportFailedStages(result);
   }
   std_msgs::Header header;
   header.stamp = dets->header.stamp;
@@ -202,6 +203,19 @@ void SceneEstimatorNode::onFrame(const sensor_msgs::ImageConstPtr& /*rgb*/,
   publish(result, header);
   ROS_DEBUG_STREAM("geofusion: keyframe " << result.keyframe << ": " << result.objects.size()
                                           << " objects, " << result.timings.total_ms << " ms");
+}
+
+// A stage whose solve failed (its result not used) is counted for diagnostics and warned about.
+void SceneEstimatorNode::reportFailedStages(const KeyframeResult& result) {
+  for (const auto& [name, report] :
+       {std::pair{"stage I", &result.stage_one}, std::pair{"stage II", &result.stage_two}}) {
+    if (!report->failed()) continue;
+    ++failed_stages_;
+    ROS_WARN_STREAM_THROTTLE(5.0, "geofusion: " << name << " at keyframe " << result.keyframe << " "
+                                                << toString(report->status)
+                                                << "; its result is not used (" << failed_stages_
+                                                << " failed stages so far)");
+  }
 }
 
 void SceneEstimatorNode::publish(const KeyframeResult& result, const std_msgs::Header& header) {
@@ -282,6 +296,9 @@ void SceneEstimatorNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   const StageTimings& t = last_.timings;
   if (frames_ == 0) {
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no synchronised input yet");
+  } else if (last_.stage_one.failed() || last_.stage_two.failed()) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                   "the last keyframe's optimisation failed; its result is not used");
   } else if (tf_failures_ + bad_depth_ > frames_ / 2) {
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
                    "most frames skipped (missing TF or unusable depth)");
@@ -315,6 +332,9 @@ void SceneEstimatorNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   status.add("detections", pipeline_->tally().summary());
   status.add("objects", last_.objects.size());
   status.add("contacts", last_.contacts.size());
+  status.add("last keyframe: stage I", toString(last_.stage_one.status));
+  status.add("last keyframe: stage II", toString(last_.stage_two.status));
+  status.add("failed optimisation stages", failed_stages_);
   status.add("last keyframe ms: consistency", t.consistency_ms);
   status.add("last keyframe ms: association", t.association_ms);
   status.add("last keyframe ms: stage I", t.stage_one_ms);

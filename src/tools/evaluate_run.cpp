@@ -9,9 +9,9 @@
 // The model set defaults to the one the ground truth names. Exit code 0, 1 when a file cannot be
 // read or nothing can be compared, 2 for bad arguments.
 #include "command_line.h"
-#include "geofusion/core/dataset.h"
-#include "geofusion/core/run_evaluation.h"
-#include "geofusion/core/run_results.h"
+#include "geofusion/estimation/run_results.h"
+#include "geofusion/evaluation/run_evaluation.h"
+#include "geofusion/simulation/dataset.h"
 #include "model_set_option.h"
 
 #include <cstdio>

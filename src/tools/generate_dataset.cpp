@@ -8,8 +8,9 @@
 //       [--scenes bench_01,...] [--keyframes N] [--image-every N] [--detector densefusion|posecnn]
 //       [--depth-encoding 16UC1|32FC1] [--no-compression] [--previews N] [--force]
 #include "command_line.h"
-#include "geofusion/core/dataset.h"
+#include "geofusion/evaluation/sequence_calibration.h"
 #include "geofusion/ros/recording_writer.h"
+#include "geofusion/simulation/dataset.h"
 #include "model_set_option.h"
 
 #include <sys/stat.h>

@@ -6,10 +6,10 @@
 //       [--rate 10] [--seed 1] [--malformed-every 0] [--tf-until -1]
 //       [--depth-encoding 32FC1|16UC1] [--detection-stamp-offset 0]
 #include "command_line.h"
-#include "geofusion/core/box_scene.h"
-#include "geofusion/core/frame_by_frame.h"
-#include "geofusion/core/sequence.h"
+#include "geofusion/estimation/frame_by_frame.h"
 #include "geofusion/ros/recording_writer.h"
+#include "geofusion/simulation/box_scene.h"
+#include "geofusion/simulation/sequence.h"
 
 #include <cmath>
 #include <cstdio>

@@ -3,7 +3,7 @@
 // ../shared/data/ycb_video beside the package source. Tools define GEOFUSION_SOURCE_DIR.
 #pragma once
 
-#include "geofusion/ros/estimator_pipeline.h"
+#include "geofusion/model/object_model.h"
 
 #include <cstdio>
 #include <cstdlib>

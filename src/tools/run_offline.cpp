@@ -6,8 +6,8 @@
 //       [--depth-topic T] [--camera-info-topic T] [--detections-topic T] [--odom-frame odom]
 //       [--background FILE.bt] [--quiet]
 #include "command_line.h"
-#include "geofusion/core/run_results.h"
-#include "geofusion/core/scene_estimator.h"
+#include "geofusion/estimation/run_results.h"
+#include "geofusion/estimation/scene_estimator.h"
 #include "geofusion/ros/estimator_pipeline.h"
 #include "model_set_option.h"
 
@@ -223,5 +223,10 @@ int main(int argc, char** argv) {
       results.frames_skipped, results.final_map.objects.size(), results.final_map.contacts.size(),
       results.wall_time_s, duration, duration > 0 ? results.wall_time_s / duration : 0.0,
       opt.out.c_str());
+  if (const int failed = failedStages(results)) {
+    std::cerr << "run_offline: warning: " << failed
+              << " optimisation stage(s) failed and their results were not used (`stages:` in "
+              << opt.out << ")\n";
+  }
   return results.keyframes.empty() ? 1 : 0;
 }

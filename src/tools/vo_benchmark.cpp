@@ -6,11 +6,11 @@
 //   vo_benchmark --bag FILE.bag --ground-truth FILE_gt.yaml [--out-dir DIR] [--threads N]
 //       [--rgb-topic T] [--depth-topic T] [--camera-info-topic T] [--quiet]
 #include "command_line.h"
-#include "geofusion/core/dataset.h"
-#include "geofusion/core/statistics.h"
-#include "geofusion/core/trajectory_metrics.h"
-#include "geofusion/core/visual_odometry.h"
+#include "geofusion/common/statistics.h"
+#include "geofusion/evaluation/trajectory_metrics.h"
+#include "geofusion/odometry/visual_odometry.h"
 #include "geofusion/ros/conversions.h"
+#include "geofusion/simulation/dataset.h"
 #include "model_set_option.h"
 
 #include <rosbag/bag.h>

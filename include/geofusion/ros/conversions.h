@@ -1,9 +1,9 @@
 // Messages <-> core types. The only place the ROS layer touches message fields one by one.
 #pragma once
 
-#include "geofusion/core/measurement.h"
+#include "geofusion/common/measurement.h"
 
-#include "geofusion/core/camera.h"
+#include "geofusion/common/camera.h"
 
 #include <geofusion/DetectionArray.h>
 #include <geometry_msgs/Point.h>

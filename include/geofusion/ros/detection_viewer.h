@@ -3,7 +3,7 @@
 // (geofusion/DetectionViewerNodelet) or as a node (detection_viewer_node).
 #pragma once
 
-#include "geofusion/core/frame_by_frame.h"
+#include "geofusion/estimation/frame_by_frame.h"
 #include "geofusion/ros/rgbd_detection_subscriber.h"
 
 #include <dynamic_reconfigure/server.h>

@@ -4,10 +4,10 @@
 // differs.
 #pragma once
 
-#include "geofusion/core/background_map.h"
-#include "geofusion/core/frame_by_frame.h"
-#include "geofusion/core/keyframe_selector.h"
-#include "geofusion/core/scene_estimator.h"
+#include "geofusion/background/background_map.h"
+#include "geofusion/estimation/frame_by_frame.h"
+#include "geofusion/estimation/keyframe_selector.h"
+#include "geofusion/estimation/scene_estimator.h"
 
 #include <geofusion/DetectionArray.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -18,12 +18,6 @@
 #include <vector>
 
 namespace geofusion {
-
-/// Loads a model set: "primitives" (built in) or the path of a model-set YAML with meshes from
-/// `models_dir` (empty: the YAML's folder). False with the reasons in `errors` when nothing
-/// loads; classes that fail alone are reported in `errors` and left out.
-bool loadModelSet(const std::string& spec, const std::string& models_dir, ModelSet* models,
-                  std::vector<std::string>* errors);
 
 class EstimatorPipeline {
  public:

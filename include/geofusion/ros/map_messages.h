@@ -2,8 +2,8 @@
 // primitive shapes coloured by class with labels, contacts as arrows coloured by type).
 #pragma once
 
-#include "geofusion/core/relations.h"
-#include "geofusion/core/scene_estimator.h"
+#include "geofusion/estimation/relations.h"
+#include "geofusion/estimation/scene_estimator.h"
 
 #include <geofusion/ObjectMap.h>
 #include <sensor_msgs/PointCloud2.h>

@@ -1,7 +1,7 @@
 // rviz markers for the package's views.
 #pragma once
 
-#include "geofusion/core/frame_by_frame.h"
+#include "geofusion/estimation/frame_by_frame.h"
 
 #include <std_msgs/Header.h>
 #include <visualization_msgs/MarkerArray.h>

@@ -4,8 +4,8 @@
 // generate_dataset).
 #pragma once
 
-#include "geofusion/core/camera.h"
-#include "geofusion/core/measurement.h"
+#include "geofusion/common/camera.h"
+#include "geofusion/common/measurement.h"
 
 #include <ros/time.h>
 #include <Eigen/Geometry>

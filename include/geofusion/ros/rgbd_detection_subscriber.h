@@ -4,7 +4,7 @@
 // bag), warns and restarts synchronisation.
 #pragma once
 
-#include "geofusion/core/input_monitor.h"
+#include "geofusion/common/input_monitor.h"
 
 #include <geofusion/DetectionArray.h>
 #include <image_transport/image_transport.h>

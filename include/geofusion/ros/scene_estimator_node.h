@@ -39,6 +39,7 @@ class SceneEstimatorNode {
                const geofusion::DetectionArrayConstPtr& dets);
   void onTimeJump(const ros::Time& from, const ros::Time& to);
   void onOdometry(const nav_msgs::OdometryConstPtr& msg);
+  void reportFailedStages(const KeyframeResult& result);
   void publish(const KeyframeResult& result, const std_msgs::Header& header);
   void broadcastCorrection(const ros::Time& stamp);
   void publishBackground(const std_msgs::Header& header);
@@ -60,6 +61,7 @@ class SceneEstimatorNode {
   std::unique_ptr<EstimatorPipeline> pipeline_;
   KeyframeResult last_;
   std::size_t keyframes_ = 0, tf_failures_ = 0, bad_depth_ = 0;
+  std::size_t failed_stages_ = 0;  // optimisation stages whose result was not used
 
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;

@@ -4,7 +4,7 @@
 // (visual_odometry_node). The tracking itself is the ROS-free VisualOdometry.
 #pragma once
 
-#include "geofusion/core/visual_odometry.h"
+#include "geofusion/odometry/visual_odometry.h"
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <message_filters/subscriber.h>

@@ -1,0 +1,75 @@
+// Data association (paper, "Data Association", Algorithm 1): measurement-to-object likelihoods
+// (label indicator x geometric consistency x Gaussian pose factor, symmetry-aware), the joint
+// one-measurement-per-object assignment of a keyframe, the false-positive score and the
+// oriented-box collision ratio used to merge overlapping objects.
+#pragma once
+
+#include "geofusion/model/object_model.h"
+
+#include <Eigen/Geometry>
+
+#include <vector>
+
+namespace geofusion {
+
+struct AssociationConfig {
+  double sigma_position_m = 0.04;   ///< Q: pose factor translation std (per axis)
+  double sigma_rotation_rad = 0.5;  ///< Q: pose factor rotation std
+  /// Below this likelihood a measurement starts a new object (eps_new).
+  double eps_new = 0.05;
+  /// Objects whose false-positive score exceeds this are not in the map (eps_fp): they stay
+  /// candidates, gathering measurements, and are deleted when not observed for
+  /// candidate_timeout_keyframes keyframes.
+  double eps_fp = 0.55;
+  int candidate_timeout_keyframes = 10;
+  /// Objects whose oriented boxes overlap by more than this collision ratio are merged, ...
+  double merge_ratio = 0.4;
+  /// ... when their convex hulls also interpenetrate by at least this (FCL), metres: the boxes
+  /// of neighbours in clutter overlap, duplicates and false positives interpenetrate.
+  double merge_min_penetration_m = 0.01;
+  /// ... or at least this share of the thinner object's smallest extent, if less.
+  double merge_thin_fraction = 0.3;
+  /// true: one Hungarian assignment per keyframe (all measurements jointly); false: the paper's
+  /// greedy order (a later measurement that wants a taken object starts a new one).
+  bool joint_assignment = true;
+};
+
+/// Rotation angle between two orientations of a model, modulo its symmetry: for a continuous
+/// symmetry the angle between the two images of the axis, for a discrete one the smallest angle
+/// over the symmetric equivalents.
+double symmetricRotationError(const Symmetry& symmetry, const Eigen::Matrix3d& R_a,
+                              const Eigen::Matrix3d& R_b);
+
+/// The symmetric equivalent of `R_measured` closest to `R_reference` (identity for no or
+/// continuous symmetry: the caller handles the free axis).
+Eigen::Matrix3d closestSymmetricEquivalent(const Symmetry& symmetry,
+                                           const Eigen::Matrix3d& R_reference,
+                                           const Eigen::Matrix3d& R_measured);
+
+/// Gaussian pose factor N(x_t^-1 o_j, Q), 1 at a perfect match: exp(-0.5 * (|dt|^2 / sigma_p^2 +
+/// angle^2 / sigma_q^2)).
+double poseLikelihood(const Symmetry& symmetry, const Eigen::Isometry3d& T_predicted,
+                      const Eigen::Isometry3d& T_measured, const AssociationConfig& config);
+
+/// Optimal assignment of rows to columns minimising the summed cost (Hungarian / Kuhn-Munkres,
+/// O(n^3)); rectangular matrices allowed. Returns for each row its column, or -1.
+std::vector<int> solveAssignment(const Eigen::MatrixXd& cost);
+
+/// Joint association of one keyframe: likelihood(k, j) of measurement k belonging to object j
+/// (0 = impossible). Returns for each measurement its object, or -1 for a new object; no object
+/// gets two measurements. Joint (Hungarian on -log likelihood with a "new object" option of cost
+/// -log eps_new for each measurement) or greedy (the paper's order) per the config.
+std::vector<int> associate(const Eigen::MatrixXd& likelihood, const AssociationConfig& config);
+
+/// The paper's false-positive score f_j = 1 - R_j / (1 + exp(-n_j)): R_j the best geometric
+/// consistency of the object's measurements, n_j their number.
+double falsePositiveScore(double best_consistency, int num_measurements);
+
+/// Collision ratio of two oriented boxes (centre and half sizes in the box frame, posed): 0 when
+/// the separating axis theorem finds a separating axis among the 15 candidates, else the smallest
+/// overlap along the six face axes divided by the smaller box's extent along that axis (1: one
+/// box inside the other along every axis).
+double boxCollisionRatio(const Eigen::Isometry3d& T_a, const Eigen::Vector3d& half_a,
+                         const Eigen::Isometry3d& T_b, const Eigen::Vector3d& half_b);
+
+}  // namespace geofusion

@@ -1,0 +1,42 @@
+// The results of running the estimator over a recording, and the YAML file they are written to
+// (docs/results.md): every keyframe's online estimate, the final map with its contacts, the
+// estimated trajectory and per-stage timings. Written by the offline runner; read by the
+// benchmark's evaluator.
+#pragma once
+
+#include "geofusion/estimation/scene_estimator.h"
+
+#include <string>
+#include <vector>
+
+namespace geofusion {
+
+struct RunResults {
+  std::string method;
+  std::string source;     ///< the recording
+  std::string model_set;  ///< name of the model set
+  double recording_duration_s = 0.0;
+  double wall_time_s = 0.0;  ///< processing time of the whole run
+  double peak_rss_mb = 0.0;  ///< the process's peak resident memory at the end (0: unknown)
+  int frames_seen = 0;       ///< synchronised RGB-D + detection sets
+  int frames_skipped = 0;    ///< ... of which unusable (no TF, bad depth)
+  std::vector<KeyframeResult> keyframes;
+  KeyframeResult final_map;    ///< after SceneEstimator::finish()
+  SupportPlane support_plane;  ///< the estimator's table plane (map frame), when it found one
+  std::vector<double> trajectory_stamps;
+  std::vector<Eigen::Isometry3d> trajectory;  ///< final estimate of T_map_cam per keyframe
+};
+
+/// Optimisation stages (keyframes and the final map) whose solve failed, their result not used.
+int failedStages(const RunResults& results);
+
+/// Writes the results YAML atomically (temporary file, then rename).
+bool writeRunResults(const std::string& path, const RunResults& results, std::string* error);
+
+/// Reads a results YAML back (the evaluator's input). Object classes are looked up in `models`
+/// (an unknown class fails); contacts get indices into their objects again. The support plane
+/// comes back with its normal and height only.
+bool readRunResults(const std::string& path, const ModelSet& models, RunResults* results,
+                    std::string* error);
+
+}  // namespace geofusion

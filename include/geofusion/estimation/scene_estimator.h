@@ -1,0 +1,207 @@
+// The scene estimator: keyframes (depth, intrinsics, odometry pose, checked detections) in;
+// objects (class, 6D pose, scores), keyframe camera poses and contact relations out. Composes
+// the modules of the paper's sections: geometric consistency (consistency.h), data association
+// (association.h), stage I and stage II (optimization.h), geometric relations (relations.h).
+// The four methods of the paper's comparison are compositions of the same stages (MethodStages),
+// chosen by EstimatorConfig::method.
+#pragma once
+
+#include "geofusion/common/measurement.h"
+#include "geofusion/estimation/association.h"
+#include "geofusion/estimation/contacts.h"
+#include "geofusion/estimation/optimization.h"
+#include "geofusion/estimation/relations.h"
+#include "geofusion/model/object_model.h"
+#include "geofusion/render/consistency.h"
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace geofusion {
+
+class OffscreenRenderer;
+class ConsistencyScorer;
+class HullCollider;
+
+/// FbF: each keyframe's detections as they are. B-SLAM: association by detector confidence, no
+/// false-positive removal or merging, stage I only. R-Front: GeoFusion's association (geometric
+/// consistency, false-positive removal, merging), no optimisation. GeoFusion: everything.
+enum class Method { kFrameByFrame, kBaselineSlam, kRobustFrontEnd, kGeoFusion };
+const char* toString(Method method);  ///< "FbF", "B-SLAM", "R-Front", "GeoFusion"
+bool parseMethod(const std::string& name, Method* method);  ///< also accepts lower case
+
+/// The stages a method composes, in the order a keyframe runs them: score the detections
+/// (geometric consistency or the detector's score), then either report them as they are (FbF) or
+/// associate them to the map's objects (Algorithm 1) with false-positive removal and merging,
+/// stage I every few keyframes, geometric relations and stage II.
+struct MethodStages {
+  bool map_is_keyframe_detections = false;  ///< FbF: the keyframe's detections are the map
+  bool geometric_consistency = false;       ///< f_gc scores (else the detector's score)
+  bool false_positive_removal = false;      ///< and merging of overlapping objects
+  bool stage_one = false;                   ///< camera and object poses in the factor graph
+  bool relations_and_stage_two = false;     ///< contacts and stage II (reported poses: stage II)
+};
+MethodStages stagesOf(Method method);
+
+struct EstimatorConfig {
+  Method method = Method::kGeoFusion;
+  ConsistencyConfig consistency;
+  AssociationConfig association;
+  StageOneConfig stage_one;
+  ContactConfig contacts;
+  SupportPlaneConfig support_plane;
+  StageTwoConfig stage_two;
+  Eigen::Vector3d gravity = -Eigen::Vector3d::UnitZ();  ///< in the map (= odom) frame
+  double min_detection_score = 0.0;                     ///< detections below are ignored
+};
+
+struct Keyframe {
+  double stamp_s = 0.0;
+  Eigen::Isometry3d T_odom_cam = Eigen::Isometry3d::Identity();  ///< odometry camera pose
+  PinholeIntrinsics K;
+  DepthImageView depth;  ///< must stay valid during addKeyframe
+  std::vector<ObjectMeasurement> detections;
+};
+
+/// An object of the map (or, for FbF, a detection of the keyframe).
+struct ObjectEstimate {
+  int id = -1;  ///< stable while the object exists; never reused
+  std::shared_ptr<const ObjectModel> model;
+  Eigen::Isometry3d T_map_obj = Eigen::Isometry3d::Identity();
+  double existence = 0.0;  ///< ranking score in [0, 1]: 1 - false-positive score (FbF: detector)
+  double false_positive = 1.0;    ///< f_j
+  double best_consistency = 0.0;  ///< R_j
+  int measurements = 0;           ///< n_j
+  int first_keyframe = -1, last_keyframe = -1;
+};
+
+struct StageTimings {
+  double consistency_ms = 0.0;
+  double association_ms = 0.0;
+  double stage_one_ms = 0.0;
+  double relations_ms = 0.0;
+  double stage_two_ms = 0.0;
+  double total_ms = 0.0;
+};
+
+/// How a keyframe's optimisation stage ended (not_run when it did not run at this keyframe).
+struct StageReport {
+  SolveStatus status = SolveStatus::kNotRun;
+  int iterations = 0;
+  double initial_cost = 0.0;
+  double final_cost = 0.0;
+  bool ran() const { return status != SolveStatus::kNotRun; }
+  bool failed() const { return ran() && !usable(status); }  ///< its result was not used
+};
+
+struct KeyframeResult {
+  int keyframe = -1;
+  double stamp_s = 0.0;
+  Eigen::Isometry3d T_map_cam = Eigen::Isometry3d::Identity();
+  std::vector<ObjectEstimate> objects;  ///< the estimate after this keyframe
+  std::vector<int> removed_ids;         ///< objects removed or merged away at this keyframe
+  /// Contacts among `objects` (indices into it; -1 = the support plane).
+  std::vector<FeatureContact> contacts;
+  std::vector<double> detection_consistency;  ///< per input detection (-1: not scored)
+  std::vector<int> detection_object;          ///< per input detection: object id, -1 = none
+  int skipped_detections = 0;                 ///< unknown class or below min score
+  bool ran_stage_one = false;
+  StageReport stage_one;  ///< a failed stage's result is not used
+  StageReport stage_two;
+  StageTimings timings;
+};
+
+class SceneEstimator {
+ public:
+  /// `renderer` may be shared with other users (calls are serialised); null makes one.
+  SceneEstimator(const ModelSet& models, const EstimatorConfig& config,
+                 std::shared_ptr<OffscreenRenderer> renderer = nullptr);
+  ~SceneEstimator();
+
+  KeyframeResult addKeyframe(const Keyframe& keyframe);
+  /// Final stage I and stage II over everything (the map a run ends with).
+  KeyframeResult finish();
+  void reset();
+
+  const EstimatorConfig& config() const { return config_; }
+  void setConfig(const EstimatorConfig& config);  ///< thresholds and weights; method kept
+  std::vector<ObjectEstimate> objects() const;
+  const std::vector<FeatureContact>& contacts() const { return contacts_; }
+  const std::vector<Eigen::Isometry3d>& trajectory() const { return T_map_cam_; }
+  std::vector<double> keyframeStamps() const { return stamps_; }
+  /// map -> odom correction at the latest keyframe (identity before the first).
+  Eigen::Isometry3d T_map_odom() const;
+  const SupportPlane& supportPlane() const { return support_; }
+  int numKeyframes() const { return static_cast<int>(T_map_cam_.size()); }
+
+ private:
+  struct Observation {
+    int keyframe = 0;
+    Eigen::Isometry3d T_cam_obj = Eigen::Isometry3d::Identity();
+    double consistency = 0.0;  ///< f_gc (B-SLAM: the detector score)
+  };
+  struct Track {
+    int id = -1;
+    std::shared_ptr<const ObjectModel> model;
+    Eigen::Isometry3d T_stage_one = Eigen::Isometry3d::Identity();  ///< stage I / initial
+    Eigen::Isometry3d T_refined = Eigen::Isometry3d::Identity();    ///< stage II
+    std::vector<Observation> observations;
+    double best_consistency = 0.0;
+    int first_keyframe = -1, last_keyframe = -1;
+    bool confirmed = false;  ///< false-positive score at most eps_fp: part of the map
+    Eigen::Vector3d box_centre = Eigen::Vector3d::Zero();  ///< model-frame bounding box
+    Eigen::Vector3d box_half = Eigen::Vector3d::Zero();
+  };
+
+  /// The keyframe's detections with the models of their classes and their scores.
+  struct ScoredDetections {
+    std::vector<int> usable;  ///< indices of the detections of known class and enough score
+    std::vector<std::shared_ptr<const ObjectModel>> models;  ///< per detection (null: unusable)
+    std::vector<double> score;  ///< f_gc, or the detector's score (-1: not scored)
+    int skipped = 0;
+  };
+
+  Eigen::Isometry3d appendCameraPose(const Keyframe& keyframe);
+  ScoredDetections scoreDetections(const Keyframe& keyframe) const;
+  std::vector<int> mapKeyframeDetections(const Keyframe& keyframe,
+                                         const ScoredDetections& detections, int t);
+  std::vector<int> associateDetections(const Keyframe& keyframe, const ScoredDetections& detections,
+                                       int t);
+  Eigen::MatrixXd associationLikelihood(const Keyframe& keyframe,
+                                        const ScoredDetections& detections) const;
+  Track& startTrack(const std::shared_ptr<const ObjectModel>& model,
+                    const Eigen::Isometry3d& T_map_obj, int t);
+  ObjectEstimate estimateOf(const Track& track) const;
+  const Eigen::Isometry3d& reportedPose(const Track& track) const;
+  /// Tracks in the map: confirmed ones (all for methods without false-positive removal).
+  std::vector<std::size_t> reportedTracks() const;
+  void removeFalsePositives(const std::vector<int>& touched, int keyframe,
+                            std::vector<int>* removed);
+  void mergeOverlapping(std::vector<int>* removed);
+  bool stageOneDue(int t) const;
+  StageReport runStageOne();
+  StageReport runRelationsAndStageTwo(const Keyframe* keyframe, StageTimings* timings);
+  KeyframeResult result(int keyframe, double stamp) const;
+
+  EstimatorConfig config_;
+  MethodStages stages_;
+  std::map<std::string, std::shared_ptr<const ObjectModel>> models_;
+  std::unique_ptr<ConsistencyScorer> scorer_;
+  std::unique_ptr<HullCollider> collider_;
+  std::vector<Track> tracks_;
+  int next_id_ = 0;
+  std::vector<Eigen::Isometry3d> T_map_cam_, T_odom_cam_;
+  std::vector<double> stamps_;
+  SupportPlane support_;
+  std::shared_ptr<ObjectModel> support_model_;
+  Eigen::Isometry3d T_map_support_ = Eigen::Isometry3d::Identity();
+  std::vector<FeatureContact> contacts_;       ///< track indices; -1 = support
+  std::vector<ObjectEstimate> frame_objects_;  ///< FbF: this keyframe's detections
+};
+
+}  // namespace geofusion

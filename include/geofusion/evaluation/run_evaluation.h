@@ -1,0 +1,129 @@
+// The benchmark's evaluator: one run of a method on one recording (run_offline results) against
+// the recording's ground truth. It makes everything geometric - per-keyframe 2D boxes of true and
+// estimated objects from projected model points, the ADD-S of every estimate against the true
+// objects of its class, the final map matched to the true objects, its contact graph, its
+// interpenetration and floating gaps - and writes it as an evaluation JSON file
+// (docs/BENCHMARK.md). COCO mAP, precision and recall come from pycocotools on that file
+// (src/tools/bench_report.py): the reference implementation, not re-implemented here.
+#pragma once
+
+#include "geofusion/common/camera.h"
+#include "geofusion/estimation/run_results.h"
+#include "geofusion/simulation/dataset.h"
+
+#include <Eigen/Geometry>
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace geofusion {
+
+/// An axis-aligned image box [x0, x1] x [y0, y1], pixels.
+struct Box2d {
+  double x0 = 0.0, y0 = 0.0, x1 = 0.0, y1 = 0.0;
+  double width() const { return x1 - x0; }
+  double height() const { return y1 - y0; }
+  bool empty() const { return !(x1 > x0 && y1 > y0); }
+};
+
+/// Intersection over union of two boxes (COCO's, no +1 on widths); 0 when either is empty.
+double boxIou(const Box2d& a, const Box2d& b);
+
+/// The box of the model points posed in the camera frame, projected with K and clipped to the
+/// image (bop_toolkit's calc_2d_bbox). Points less than 1 cm in front of the camera are left
+/// out; empty when none is left or the box misses the image.
+Box2d projectedBox(const std::vector<Eigen::Vector3f>& points, const Eigen::Isometry3d& T_cam_obj,
+                   const PinholeIntrinsics& K);
+
+struct EvaluationConfig {
+  /// Ground truth less visible than this is ignored (passed to pycocotools as a crowd).
+  double min_visible_fraction = 0.1;
+  /// Final map objects match true objects of their class one to one, ADD-S below this.
+  double match_max_adds_m = 0.05;
+  /// Object pairs (and objects and the table) closer than this count as touching.
+  double touch_distance_m = 0.001;
+  /// ADD-S of an estimate is computed against ground truth whose box overlaps its box at least
+  /// this much: the report takes ADD-S of true positives at IoU 0.5 only (kept a little lower so
+  /// that rounding never loses a pair).
+  double adds_min_iou = 0.45;
+  /// Results keyframes find their ground-truth frame by stamp within this.
+  double stamp_tolerance_s = 0.005;
+};
+
+struct GroundTruthBox {
+  int id = 0;     ///< unique within the evaluation, from 1
+  int image = 0;  ///< keyframe index
+  int class_id = 0;
+  Box2d box;
+  bool crowd = false;  ///< less than min_visible_fraction visible: ignored
+  int object = -1;     ///< index of the scene object
+  double visible_fraction = 0.0;
+};
+
+struct DetectionBox {
+  int id = 0;
+  int image = 0;
+  int class_id = 0;
+  Box2d box;
+  double score = 0.0;
+  int object_id = -1;  ///< the method's object id
+  /// ADD-S (m) against each same-class, not ignored ground truth box of the image that its box
+  /// overlaps at adds_min_iou or more: (ground truth id, value).
+  std::vector<std::pair<int, double>> adds_m;
+};
+
+struct GraphObject {
+  int id = -1;  ///< true objects: their index; estimated objects: their id
+  std::string class_name;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  ///< ground-truth map frame
+  int match = -1;  ///< estimated objects: the true object matched, -1 none
+};
+
+struct GraphContact {
+  int a = -1, b = -1;  ///< as GraphObject::id; a = -1 is the table / support plane
+  std::string type;    ///< P2P, P2C, C2C
+  bool support = true;
+  bool correct = false;  ///< estimated contacts: the true graph has it
+};
+
+struct RunEvaluation {
+  std::string scene, method;
+  int image_width = 0, image_height = 0;
+  std::vector<std::pair<int, std::string>> categories;  ///< (class id, name) of the model set
+  std::vector<std::pair<int, double>> images;           ///< (keyframe index, stamp)
+  int unmatched_keyframes = 0;  ///< results keyframes without a ground-truth frame
+  std::vector<GroundTruthBox> ground_truth;
+  std::vector<DetectionBox> detections;
+
+  // The final map, aligned to the ground truth by the trajectories (Umeyama, no scale).
+  Eigen::Isometry3d T_true_est = Eigen::Isometry3d::Identity();
+  double alignment_rmse_m = 0.0;
+  int map_objects = 0, map_matched = 0, true_objects = 0;
+  std::vector<double> map_adds_m;  ///< of each matched object
+  /// Support contacts of the map against the true support contacts, as (object pair, type).
+  bool has_contacts = false;  ///< false: the method infers none (FbF, B-SLAM, R-Front)
+  int true_contacts = 0, estimated_contacts = 0, correct_contacts = 0;
+  int true_contacts_between_matched = 0;  ///< true contacts among matched objects and the table
+  std::vector<double> penetration_m;      ///< per touching or intersecting pair (object or table)
+  std::vector<double> gap_m;              ///< per true support of a matched object
+  std::vector<GraphObject> graph_true_objects, graph_estimated_objects;
+  std::vector<GraphContact> graph_true_contacts, graph_estimated_contacts;
+
+  std::vector<StageTimings> timings;  ///< per keyframe
+  double recording_duration_s = 0.0, wall_time_s = 0.0, peak_rss_mb = 0.0;
+};
+
+/// Evaluates `results` against `gt`. False with `error` when nothing can be compared (no
+/// keyframe of the results is in the ground truth).
+bool evaluateRun(const GroundTruth& gt, const RunResults& results, const EvaluationConfig& config,
+                 RunEvaluation* evaluation, std::string* error);
+
+/// Writes the evaluation JSON (format geofusion_evaluation_v1, docs/BENCHMARK.md) atomically.
+bool writeEvaluationJson(const std::string& path, const RunEvaluation& evaluation,
+                         std::string* error);
+
+/// A few lines for people: objects found and true, pose error, contacts, plausibility, time.
+std::string summarize(const RunEvaluation& evaluation);
+
+}  // namespace geofusion

@@ -1,0 +1,39 @@
+// Collision geometry of the models: each model's convex collision hull (FCL) and the queries the
+// estimator (stage II's interpenetration check) and the simulation (settling scenes, ground-truth
+// contacts) share.
+#pragma once
+
+#include "geofusion/model/mesh.h"
+
+#include <Eigen/Geometry>
+
+#include <memory>
+
+namespace geofusion {
+
+struct ObjectModel;
+
+/// A model's collision hull: the one its ModelSet computed, or one made from its mesh for a model
+/// built by hand.
+TriangleMesh collisionHullOf(const ObjectModel& model);
+
+/// FCL: interpenetration depth of two posed models' convex collision hulls (0 when apart).
+/// Keeps each model's FCL geometry (keyed by the model, which it keeps alive) for repeated use.
+class HullCollider {
+ public:
+  HullCollider();
+  ~HullCollider();
+  double penetration(const std::shared_ptr<const ObjectModel>& a,
+                     const Eigen::Isometry3d& T_world_a,
+                     const std::shared_ptr<const ObjectModel>& b,
+                     const Eigen::Isometry3d& T_world_b);
+  /// Distance between the two hulls, 0 when they touch or intersect.
+  double distance(const std::shared_ptr<const ObjectModel>& a, const Eigen::Isometry3d& T_world_a,
+                  const std::shared_ptr<const ObjectModel>& b, const Eigen::Isometry3d& T_world_b);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace geofusion

@@ -1,0 +1,75 @@
+// Object models and model sets: class, mesh, evaluation points, symmetry and surface features.
+#pragma once
+
+#include "geofusion/model/mesh.h"
+#include "geofusion/model/surface_features.h"
+
+#include <Eigen/Geometry>
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace geofusion {
+
+struct Symmetry {
+  enum class Type { kNone, kDiscrete, kContinuous };
+  Type type = Type::kNone;
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  ///< kContinuous: unit axis, model frame
+  std::vector<Eigen::Quaterniond> rotations;        ///< kDiscrete: non-identity symmetries
+};
+
+struct ObjectModel {
+  std::string name;  ///< class label, e.g. "003_cracker_box"
+  int id = -1;       ///< class id
+  TriangleMesh mesh;
+  std::string mesh_path;                ///< file the mesh came from; empty for primitives
+  std::vector<Eigen::Vector3f> points;  ///< evaluation points (ADD/ADD-S), model frame
+  Symmetry symmetry;
+  SurfaceFeatures features;
+  Eigen::Vector3f extents = Eigen::Vector3f::Zero();  ///< axis-aligned size, metres
+  /// Convex hull of a simplified mesh: the shape physics (Bullet) and collision checks (FCL) use.
+  TriangleMesh collision_hull;
+};
+
+/// The convex collision hull ObjectModel::collision_hull holds (hull of a <= 400-triangle,
+/// <= 2 mm simplification of the mesh).
+TriangleMesh collisionHull(const TriangleMesh& mesh);
+
+class ModelSet {
+ public:
+  /// The package's own primitive models: boxes and cylinders with the sizes of common YCB
+  /// objects, named like them (003_cracker_box, 005_tomato_soup_can, ...), no files needed.
+  static ModelSet builtinPrimitives();
+
+  /// Loads a model set YAML (format in docs/model_sets.md). Relative mesh and points paths are
+  /// resolved against `models_dir` (empty: the YAML's folder). Classes whose files are missing or
+  /// corrupt are left out and each gives one message in `errors` naming the file; the rest load.
+  /// Returns false only when the YAML itself cannot be read or parsed.
+  static bool load(const std::string& yaml_path, const std::string& models_dir, ModelSet* set,
+                   std::vector<std::string>* errors);
+
+  const ObjectModel* find(const std::string& name) const;
+  const ObjectModel* findById(int id) const;
+  const std::vector<std::shared_ptr<const ObjectModel>>& models() const { return models_; }
+  std::size_t size() const { return models_.size(); }
+  const std::string& name() const { return name_; }
+
+  /// Adds a model, filling extents, evaluation points (sampled when empty) and surface features
+  /// (extracted when empty).
+  void add(ObjectModel model, const SurfaceFeatureConfig& feature_config = {});
+
+ private:
+  std::string name_;
+  std::vector<std::shared_ptr<const ObjectModel>> models_;
+  std::map<std::string, std::size_t> by_name_;
+};
+
+/// Loads a model set: "primitives" (built in) or the path of a model-set YAML with meshes from
+/// `models_dir` (empty: the YAML's folder). False with the reasons in `errors` when nothing
+/// loads; classes that fail alone are reported in `errors` and left out.
+bool loadModelSet(const std::string& spec, const std::string& models_dir, ModelSet* models,
+                  std::vector<std::string>* errors);
+
+}  // namespace geofusion

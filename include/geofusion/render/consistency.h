@@ -1,0 +1,98 @@
+// Geometric consistency score f_gc of a measurement (paper, "Data Association"): how well the
+// object model rendered at the detected pose agrees with the observed depth image.
+#pragma once
+
+#include "geofusion/common/camera.h"
+#include "geofusion/common/images.h"
+#include "geofusion/render/renderer.h"
+
+#include <Eigen/Geometry>
+
+#include <cstdint>
+#include <map>
+#include <memory>
+
+namespace geofusion {
+
+struct ObjectModel;
+
+/// The paper's "modified sigmoid": a logistic curve of given centre and steepness, rescaled so
+/// that S(0) = 0 and S(1) = 1 on the ratio domain [0, 1] (inputs are clamped to it).
+struct ModifiedSigmoid {
+  double centre = 0.5;
+  double steepness = 10.0;
+  double operator()(double x) const;
+};
+
+struct ConsistencyConfig {
+  /// Sensor resolution (metres along the ray): a rendered point whose observed point on the same
+  /// ray is closer than this is an inlier.
+  double eps_res = 0.01;
+  /// A rendered point whose observed point lies farther behind it than this is an outlier.
+  /// Points between eps_res and eps_out behind count in the total only.
+  double eps_out = 0.02;
+  /// f_gc = S_in(r_in) * S_out(1 - r_out) * S_occ(1 - r_occ).
+  ModifiedSigmoid inlier{0.75, 15.0};
+  ModifiedSigmoid outlier{0.85, 25.0};
+  ModifiedSigmoid occlusion{0.2, 10.0};
+  /// Fewer rendered points with an observed depth than this: the score is undetermined.
+  int min_points = 30;
+  /// Score given when undetermined (object outside the image, or no depth where it projects).
+  double undetermined_score = 0.5;
+  /// Use every n-th row and column of the rendered region (1 = every pixel).
+  int pixel_stride = 1;
+  /// Models are rendered from a simplified copy of their mesh (meshoptimizer): at most this many
+  /// triangles, unless that would move the surface by more than render_mesh_max_error_m.
+  int render_mesh_triangles = 1500;
+  double render_mesh_max_error_m = 0.001;
+};
+
+struct ConsistencyResult {
+  int rendered = 0;   ///< rendered points visited
+  int missing = 0;    ///< ... of which the observation has no depth: neither inlier nor outlier
+  int inliers = 0;    ///< observed point within eps_res
+  int outliers = 0;   ///< observed point more than eps_out behind the rendered one
+  int occluded = 0;   ///< observed point more than eps_res in front (something hides the model)
+  int uncertain = 0;  ///< observed point between eps_res and eps_out behind
+  /// r_occ: occluded / (rendered - missing). r_in, r_out: inliers, outliers / (rendered -
+  /// missing - occluded), i.e. fractions of the part of the model that should be visible.
+  double r_in = 0.0;
+  double r_out = 0.0;
+  double r_occ = 0.0;
+  double score = 0.0;       ///< f_gc in [0, 1]
+  bool determined = false;  ///< false: too few observed points; score = undetermined_score
+};
+
+/// Compares a rendering of one model (depth > 0 where it was drawn) with the observed depth.
+/// The rendered region must lie inside the observed image.
+ConsistencyResult compareDepth(const RenderedImages& rendered, const DepthImageView& observed,
+                               const PinholeIntrinsics& K, const ConsistencyConfig& config);
+
+/// Renders models at measured poses (restricted to their image region) and scores them. Keeps
+/// one mesh upload per model for its lifetime. Not for concurrent use from several threads.
+class ConsistencyScorer {
+ public:
+  explicit ConsistencyScorer(std::shared_ptr<OffscreenRenderer> renderer,
+                             ConsistencyConfig config = ConsistencyConfig());
+
+  /// f_gc of `model` at pose T_cam_model against `observed` depth taken with camera K. A model
+  /// whose mesh cannot be rendered, or a pose entirely outside the view, gives an undetermined
+  /// result.
+  ConsistencyResult score(const std::shared_ptr<const ObjectModel>& model,
+                          const Eigen::Isometry3d& T_cam_model, const DepthImageView& observed,
+                          const PinholeIntrinsics& K);
+
+  const ConsistencyConfig& config() const { return config_; }
+  void setConfig(const ConsistencyConfig& config) { config_ = config; }
+  OffscreenRenderer& renderer() { return *renderer_; }
+
+ private:
+  MeshHandle handleFor(const std::shared_ptr<const ObjectModel>& model);
+
+  std::shared_ptr<OffscreenRenderer> renderer_;
+  ConsistencyConfig config_;
+  std::map<std::shared_ptr<const ObjectModel>, MeshHandle> handles_;
+  RenderedImages scratch_;
+};
+
+}  // namespace geofusion

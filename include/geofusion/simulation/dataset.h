@@ -1,0 +1,103 @@
+// Named data suites (demo, bench) and the ground-truth file written beside each recording.
+// (The calibration check of a suite's noisy inputs is evaluation/sequence_calibration.h.) ROS-free;
+// the generate_dataset tool writes the recordings (docs/dataset.md documents the file formats).
+#pragma once
+
+#include "geofusion/simulation/clutter_scene.h"
+#include "geofusion/simulation/sequence.h"
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace geofusion {
+
+struct SceneSpec {
+  std::string name;  ///< file stem, e.g. "bench_01"
+  unsigned seed = 1;
+  int num_objects = 12;
+};
+
+/// Everything that makes a suite; deterministic for the scene seeds.
+struct SuiteSpec {
+  std::string name;
+  /// "primitives" (built in) or "ycb_video" (config/models/ycb_video.yaml, meshes from a folder).
+  std::string model_set = "primitives";
+  std::vector<SceneSpec> scenes;
+  ClutterConfig clutter;
+  double camera_rate_hz = 30.0;  ///< TF and odometry at this rate
+  int keyframes = 200;           ///< frames with images and detections
+  int image_every = 6;           ///< images every Nth camera frame (1: all, at 30 Hz)
+  TrajectoryConfig trajectory;   ///< frames and rate_hz are derived from the three above
+  OdometryNoise odometry;
+  DepthNoise depth;
+  DetectorModel detector;
+  double stamp_origin_s = 1600000000.0;  ///< ROS time of the first frame
+  /// Table and floor textured (writeBackgroundTextures) instead of plain colours.
+  bool textured_background = false;
+
+  int cameraFrames() const { return (keyframes - 1) * image_every + 1; }
+  bool isKeyframe(int frame) const { return image_every > 0 && frame % image_every == 0; }
+};
+
+/// Bumped whenever the generator's output for the same request changes (cached scenes made by
+/// another version are remade).
+constexpr int kGeneratorVersion = 2;
+
+/// Every setting of a suite that shapes its data, one line (the cache key of generated scenes).
+std::string describeSuite(const SuiteSpec& suite);
+
+/// The suites the package knows: "demo" (one small scene, built-in primitives, seconds to make)
+/// and "bench" (6 scenes of about 18 YCB-Video objects, 200 keyframes each). False for others.
+bool suiteByName(const std::string& name, SuiteSpec* suite);
+std::vector<std::string> suiteNames();
+
+/// The settled clutter scene of a suite's scene spec. A seed whose scene fails the penetration
+/// bound is followed by derived seeds (deterministically) until one settles; `used_seed` receives
+/// it. False with `report` when none of `attempts` settles.
+bool makeSuiteScene(const SuiteSpec& suite, const SceneSpec& spec, const ModelSet& models,
+                    ClutterScene* scene, unsigned* used_seed, std::string* report,
+                    int attempts = 8);
+
+/// Ground truth of one recording.
+struct GroundTruthFrame {
+  int index = 0;         ///< camera frame number
+  double stamp_s = 0.0;  ///< ROS time, seconds
+  bool keyframe = false;
+  Eigen::Isometry3d T_map_base = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_odom_base = Eigen::Isometry3d::Identity();    ///< as recorded
+  Eigen::Isometry3d T_base_link = Eigen::Isometry3d::Identity();    ///< base -> camera link
+  Eigen::Isometry3d T_map_optical = Eigen::Isometry3d::Identity();  ///< camera
+  std::vector<double> visible_fraction;                             ///< keyframes, per object
+  std::vector<int> visible_pixels;                                  ///< keyframes, per object
+  std::vector<int> detection_truth;  ///< keyframes, per detection: object index, -1 = false
+};
+
+struct GroundTruth {
+  std::string suite;
+  std::string scene_name;
+  unsigned seed = 0;        ///< the scene spec's seed
+  unsigned scene_seed = 0;  ///< the seed the clutter scene settled with (makeSuiteScene)
+  std::string model_set;    ///< name of the model set the classes come from
+  std::string detector;     ///< detector preset
+  PinholeIntrinsics intrinsics;
+  std::string map_frame = "map", odom_frame = "odom", base_frame = "base_link",
+              camera_link_frame = "head_camera_link",
+              camera_frame = "head_camera_rgb_optical_frame";
+  ClutterScene scene;  ///< table, objects (map frame), contact graph
+  std::vector<GroundTruthFrame> frames;
+};
+
+/// Writes the ground-truth YAML atomically (temporary file, then rename).
+bool writeGroundTruth(const std::string& path, const GroundTruth& gt, std::string* error);
+/// Reads it back; object classes are looked up in `models` (unknown classes fail).
+bool readGroundTruth(const std::string& path, const ModelSet& models, GroundTruth* gt,
+                     std::string* error);
+
+/// Writes PNGs of a frame for looking at: <prefix>_rgb.png, <prefix>_depth.png (colour map over
+/// 0.4-2.5 m, holes black) and <prefix>_detections.png (RGB with detection boxes and labels,
+/// green true, red false positive).
+bool writeFramePreview(const std::string& prefix, const PinholeIntrinsics& K,
+                       const SequenceFrame& frame, std::string* error);
+
+}  // namespace geofusion

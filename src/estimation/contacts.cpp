@@ -1,0 +1,271 @@
+#include "geofusion/estimation/contacts.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace geofusion {
+
+const char* toString(ContactType type) {
+  switch (type) {
+    case ContactType::kPlanePlane: return "plane-plane";
+    case ContactType::kPlaneCurve: return "plane-curve";
+    case ContactType::kCurveCurve: return "curve-curve";
+  }
+  return "?";
+}
+
+const char* shortName(ContactType type) {
+  switch (type) {
+    case ContactType::kPlanePlane: return "P2P";
+    case ContactType::kPlaneCurve: return "P2C";
+    default: return "C2C";
+  }
+}
+
+ContactType contactTypeOfShortName(const std::string& name) {
+  for (ContactType t :
+       {ContactType::kPlanePlane, ContactType::kPlaneCurve, ContactType::kCurveCurve}) {
+    if (name == shortName(t)) return t;
+  }
+  throw std::runtime_error("unknown contact type '" + name + "'");
+}
+
+namespace {
+
+using Point2 = Eigen::Vector2d;
+
+double cross2(const Point2& o, const Point2& a, const Point2& b) {
+  return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();
+}
+
+// Convex hull (Andrew's monotone chain), counter-clockwise; fewer than 3 points come back as is.
+std::vector<Point2> hull2d(std::vector<Point2> p) {
+  std::sort(p.begin(), p.end(), [](const Point2& a, const Point2& b) {
+    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
+  });
+  p.erase(std::unique(p.begin(), p.end(),
+                      [](const Point2& a, const Point2& b) { return (a - b).norm() < 1e-9; }),
+          p.end());
+  if (p.size() < 3) return p;
+  std::vector<Point2> h(2 * p.size());
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    while (k >= 2 && cross2(h[k - 2], h[k - 1], p[i]) <= 0) --k;
+    h[k++] = p[i];
+  }
+  for (std::size_t i = p.size() - 1, t = k + 1; i > 0; --i) {
+    while (k >= t && cross2(h[k - 2], h[k - 1], p[i - 1]) <= 0) --k;
+    h[k++] = p[i - 1];
+  }
+  h.resize(k - 1);
+  if (h.size() < 3) {  // collinear: keep the two extremes
+    return {p.front(), p.back()};
+  }
+  return h;
+}
+
+void addAxes(const std::vector<Point2>& poly, std::vector<Point2>* axes) {
+  if (poly.size() == 2) {
+    const Point2 d = (poly[1] - poly[0]).normalized();
+    axes->push_back(d);
+    axes->emplace_back(-d.y(), d.x());
+    return;
+  }
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    const Point2 e = poly[(i + 1) % poly.size()] - poly[i];
+    if (e.norm() < 1e-12) continue;
+    axes->push_back(Point2(-e.y(), e.x()).normalized());
+  }
+}
+
+struct WorldPlane {
+  Eigen::Vector3d center, normal;
+  std::vector<Eigen::Vector3d> boundary;
+};
+struct WorldCurve {
+  Eigen::Vector3d center, axis, end_a, end_b;
+  double radius;
+};
+
+std::vector<WorldPlane> worldPlanes(const PosedModel& m) {
+  std::vector<WorldPlane> out;
+  for (const auto& p : m.model->features.planes) {
+    WorldPlane w{m.T_world_obj * p.center, m.T_world_obj.linear() * p.normal, {}};
+    for (const auto& b : p.boundary) w.boundary.push_back(m.T_world_obj * b);
+    out.push_back(std::move(w));
+  }
+  return out;
+}
+
+std::vector<WorldCurve> worldCurves(const PosedModel& m) {
+  std::vector<WorldCurve> out;
+  for (const auto& c : m.model->features.curves) {
+    out.push_back({m.T_world_obj * c.center, m.T_world_obj.linear() * c.axis,
+                   m.T_world_obj * c.end_a, m.T_world_obj * c.end_b, c.radius_m});
+  }
+  return out;
+}
+
+}  // namespace
+
+bool projectionsOverlap(const std::vector<Eigen::Vector3d>& a,
+                        const std::vector<Eigen::Vector3d>& b, const Eigen::Vector3d& direction,
+                        double min_overlap, double line_tolerance) {
+  if (a.empty() || b.empty() || direction.norm() < 1e-12) return false;
+  const Eigen::Vector3d n = direction.normalized();
+  const Eigen::Vector3d u = n.unitOrthogonal(), w = n.cross(u);
+  auto project = [&](const std::vector<Eigen::Vector3d>& pts) {
+    std::vector<Point2> out;
+    out.reserve(pts.size());
+    for (const auto& p : pts) out.emplace_back(p.dot(u), p.dot(w));
+    return hull2d(out);
+  };
+  const std::vector<Point2> pa = project(a), pb = project(b);
+  std::vector<Point2> axes;
+  addAxes(pa, &axes);
+  addAxes(pb, &axes);
+  if (axes.empty()) axes = {Point2::UnitX(), Point2::UnitY()};
+  // Smallest separating push over all axes (SAT penetration depth); it is the overlap. Along an
+  // axis across which both outlines have no width (two parallel line features, e.g. cans lying
+  // side by side seen along their contact normal), there is no area to overlap: the outlines need
+  // only meet within line_tolerance there.
+  double depth = std::numeric_limits<double>::max();
+  for (const Point2& ax : axes) {
+    double lo_a = std::numeric_limits<double>::max(), hi_a = -lo_a, lo_b = lo_a, hi_b = -lo_a;
+    for (const auto& p : pa) lo_a = std::min(lo_a, p.dot(ax)), hi_a = std::max(hi_a, p.dot(ax));
+    for (const auto& p : pb) lo_b = std::min(lo_b, p.dot(ax)), hi_b = std::max(hi_b, p.dot(ax));
+    const double d = std::min(hi_a - lo_b, hi_b - lo_a);
+    if (std::max(hi_a - lo_a, hi_b - lo_b) < 1e-6) {
+      if (d < -line_tolerance) return false;
+    } else {
+      depth = std::min(depth, d);
+    }
+  }
+  return depth >= min_overlap;
+}
+
+std::vector<FeatureContact> findContacts(const std::vector<PosedModel>& objects, int a, int b,
+                                         const Eigen::Vector3d& gravity, const ContactConfig& cfg) {
+  std::vector<FeatureContact> out;
+  if (a == b || a < 0 || b < 0 || a >= static_cast<int>(objects.size()) ||
+      b >= static_cast<int>(objects.size()) || !objects[a].model || !objects[b].model)
+    return out;
+  const Eigen::Vector3d up = -gravity.normalized();
+  const auto planes_a = worldPlanes(objects[a]), planes_b = worldPlanes(objects[b]);
+  const auto curves_a = worldCurves(objects[a]), curves_b = worldCurves(objects[b]);
+
+  // Makes a candidate between objects i and j (normal from i to j), applies the support and
+  // projection checks, and keeps it.
+  auto accept = [&](int i, int j, ContactType type, FeatureRef fi, FeatureRef fj,
+                    const Eigen::Vector3d& normal, double dir, double dist,
+                    const std::vector<Eigen::Vector3d>& outline_i,
+                    const std::vector<Eigen::Vector3d>& outline_j) {
+    FeatureContact c;
+    c.object_a = i;
+    c.object_b = j;
+    c.type = type;
+    c.feature_a = fi;
+    c.feature_b = fj;
+    c.normal = normal;
+    c.direction_residual = dir;
+    c.distance_residual = dist;
+    const double vertical = c.normal.dot(up);
+    c.support = std::abs(vertical) > cfg.eps_g;
+    if (cfg.support_only && !c.support) return;
+    // Project along gravity for support contacts (the paper), along the normal otherwise.
+    const Eigen::Vector3d along = c.support ? up : c.normal;
+    if (!projectionsOverlap(outline_i, outline_j, along, cfg.min_overlap_m, cfg.line_tolerance_m))
+      return;
+    if (c.support && vertical < 0) {  // the supporter comes first
+      std::swap(c.object_a, c.object_b);
+      std::swap(c.feature_a, c.feature_b);
+      c.normal = -c.normal;
+    }
+    out.push_back(c);
+  };
+
+  // Plane-plane.
+  for (std::size_t u = 0; u < planes_a.size(); ++u) {
+    for (std::size_t v = 0; v < planes_b.size(); ++v) {
+      const WorldPlane &pu = planes_a[u], &pv = planes_b[v];
+      const double dir = std::abs(pu.normal.dot(pv.normal) + 1.0);
+      const double dist = pu.normal.dot(pv.center - pu.center);
+      if (dir >= cfg.eps_n_pp || std::abs(dist) >= cfg.eps_c_pp) continue;
+      accept(a, b, ContactType::kPlanePlane, {true, static_cast<int>(u)},
+             {true, static_cast<int>(v)}, pu.normal, dir, dist, pu.boundary, pv.boundary);
+    }
+  }
+  if (!out.empty()) return out;
+
+  // Plane-curve, both ways round.
+  auto plane_curve = [&](const std::vector<WorldPlane>& planes, int plane_obj,
+                         const std::vector<WorldCurve>& curves, int curve_obj) {
+    for (std::size_t u = 0; u < planes.size(); ++u) {
+      for (std::size_t v = 0; v < curves.size(); ++v) {
+        const WorldPlane& p = planes[u];
+        const WorldCurve& k = curves[v];
+        const double dir = std::abs(p.normal.dot(k.axis));
+        const double dist = p.normal.dot(k.center - p.center) - k.radius;
+        if (dir >= cfg.eps_n_pc || std::abs(dist) >= cfg.eps_c_pc) continue;
+        accept(plane_obj, curve_obj, ContactType::kPlaneCurve, {true, static_cast<int>(u)},
+               {false, static_cast<int>(v)}, p.normal, dir, dist, p.boundary, {k.end_a, k.end_b});
+      }
+    }
+  };
+  plane_curve(planes_a, a, curves_b, b);
+  plane_curve(planes_b, b, curves_a, a);
+  if (!out.empty()) return out;
+
+  // Curve-curve.
+  for (std::size_t u = 0; u < curves_a.size(); ++u) {
+    for (std::size_t v = 0; v < curves_b.size(); ++v) {
+      const WorldCurve &cu = curves_a[u], &cv = curves_b[v];
+      const Eigen::Vector3d d = cv.center - cu.center;
+      Eigen::Vector3d n = cu.axis.cross(cv.axis);
+      if (n.norm() > 0.1) {
+        n.normalize();
+      } else {  // (nearly) parallel axes: the perpendicular from one axis to the other
+        n = d - d.dot(cu.axis) * cu.axis;
+        if (n.norm() < 1e-9) continue;
+        n.normalize();
+      }
+      if (n.dot(d) < 0) n = -n;
+      const double dist = n.dot(d) - (cu.radius + cv.radius);
+      if (std::abs(dist) >= cfg.eps_c_cc) continue;
+      accept(a, b, ContactType::kCurveCurve, {false, static_cast<int>(u)},
+             {false, static_cast<int>(v)}, n, 0.0, dist, {cu.end_a, cu.end_b},
+             {cv.end_a, cv.end_b});
+    }
+  }
+  return out;
+}
+
+std::vector<FeatureContact> findAllContacts(const std::vector<PosedModel>& objects,
+                                            const Eigen::Vector3d& gravity,
+                                            const ContactConfig& config) {
+  std::vector<Eigen::Vector3d> centre(objects.size());
+  std::vector<double> radius(objects.size(), 0.0);
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    if (!objects[i].model) continue;
+    Eigen::Vector3f lo, hi;
+    objects[i].model->mesh.bounds(&lo, &hi);
+    centre[i] = objects[i].T_world_obj * (0.5f * (lo + hi)).cast<double>();
+    radius[i] = 0.5 * static_cast<double>((hi - lo).norm());
+  }
+  std::vector<FeatureContact> out;
+  const double reach = std::max({config.eps_c_pp, config.eps_c_pc, config.eps_c_cc});
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    for (std::size_t j = i + 1; j < objects.size(); ++j) {
+      if (!objects[i].model || !objects[j].model) continue;
+      if ((centre[i] - centre[j]).norm() > radius[i] + radius[j] + reach) continue;
+      const auto c =
+          findContacts(objects, static_cast<int>(i), static_cast<int>(j), gravity, config);
+      out.insert(out.end(), c.begin(), c.end());
+    }
+  }
+  return out;
+}
+
+}  // namespace geofusion

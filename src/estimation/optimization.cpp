@@ -1,0 +1,293 @@
+#include "geofusion/estimation/optimization.h"
+
+#include "geofusion/estimation/association.h"
+#include "geofusion/estimation/factors/contact_factor.h"
+#include "geofusion/estimation/factors/pose_block.h"
+#include "geofusion/estimation/factors/relative_pose_factor.h"
+
+#include <ceres/ceres.h>
+#include <ceres/manifold.h>
+#include <ceres/product_manifold.h>
+
+#include <array>
+#include <cmath>
+#include <memory>
+
+namespace geofusion {
+namespace {
+
+// The pose blocks (factors/pose_block.h) live on the product of the unit-quaternion and
+// Euclidean manifolds.
+using PoseManifold =
+    ceres::ProductManifold<ceres::EigenQuaternionManifold, ceres::EuclideanManifold<3>>;
+
+ceres::LossFunction* makeLoss(const RobustLoss& loss) {
+  if (loss.type == "huber") return new ceres::HuberLoss(loss.scale);
+  if (loss.type == "cauchy") return new ceres::CauchyLoss(loss.scale);
+  return nullptr;
+}
+
+ceres::Solver::Summary solveQuietly(
+    ceres::Problem* problem, ceres::LinearSolverType solver, int max_iterations,
+    std::shared_ptr<ceres::ParameterBlockOrdering> ordering = nullptr) {
+  ceres::Solver::Options options;
+  if (ordering) options.linear_solver_ordering = ordering;
+  options.linear_solver_type = solver;
+  options.max_num_iterations = max_iterations;
+  options.num_threads = 1;
+  options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, problem, &summary);
+  return summary;
+}
+
+bool freeAxis(const ObjectModel* model, Eigen::Vector3d* axis) {
+  if (model && model->symmetry.type == Symmetry::Type::kContinuous) {
+    *axis = model->symmetry.axis;
+    return true;
+  }
+  *axis = Eigen::Vector3d::UnitZ();
+  return false;
+}
+
+// The outcome of a Ceres solve (SolveStatus).
+SolveStatus statusOf(const ceres::Solver::Summary& s) {
+  if (!s.IsSolutionUsable()) return SolveStatus::kFailed;
+  if (s.final_cost > s.initial_cost) return SolveStatus::kCostIncreased;
+  if (s.termination_type == ceres::NO_CONVERGENCE) return SolveStatus::kIterationLimit;
+  return SolveStatus::kConverged;
+}
+
+}  // namespace
+
+const char* toString(SolveStatus status) {
+  switch (status) {
+    case SolveStatus::kNotRun: return "not_run";
+    case SolveStatus::kConverged: return "converged";
+    case SolveStatus::kIterationLimit: return "iteration_limit";
+    case SolveStatus::kNothingToSolve: return "nothing_to_solve";
+    case SolveStatus::kFailed: return "failed";
+    case SolveStatus::kCostIncreased: return "cost_increased";
+    default: return "bad_input";
+  }
+}
+
+bool parseSolveStatus(const std::string& name, SolveStatus* status) {
+  for (SolveStatus s : {SolveStatus::kNotRun, SolveStatus::kConverged, SolveStatus::kIterationLimit,
+                        SolveStatus::kNothingToSolve, SolveStatus::kFailed,
+                        SolveStatus::kCostIncreased, SolveStatus::kBadInput}) {
+    if (name == toString(s)) {
+      *status = s;
+      return true;
+    }
+  }
+  return false;
+}
+
+bool usable(SolveStatus status) {
+  return status == SolveStatus::kConverged || status == SolveStatus::kIterationLimit ||
+         status == SolveStatus::kNothingToSolve;
+}
+
+StageOneSummary optimizeStageOne(std::vector<Eigen::Isometry3d>* T_map_cam,
+                                 const std::vector<Eigen::Isometry3d>& T_odom_cam,
+                                 std::vector<Eigen::Isometry3d>* T_map_obj,
+                                 const std::vector<const ObjectModel*>& models,
+                                 const std::vector<StageOneMeasurement>& measurements,
+                                 const StageOneConfig& config) {
+  StageOneSummary summary;
+  const std::size_t n_kf = T_map_cam->size(), n_obj = T_map_obj->size();
+  if (n_kf == 0 || T_odom_cam.size() != n_kf || models.size() != n_obj) {
+    summary.message = "inconsistent sizes";
+    summary.status = SolveStatus::kBadInput;
+    return summary;
+  }
+  std::vector<PoseBlock> cams(n_kf), objs(n_obj);
+  for (std::size_t i = 0; i < n_kf; ++i) cams[i].set((*T_map_cam)[i]);
+  for (std::size_t j = 0; j < n_obj; ++j) objs[j].set((*T_map_obj)[j]);
+
+  ceres::Problem::Options problem_options;
+  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  PoseManifold manifold;
+  auto add_pose = [&](PoseBlock& b) { problem.AddParameterBlock(b.data(), 7, &manifold); };
+  for (auto& c : cams) add_pose(c);
+  const double wp_odo = 1.0 / config.odometry_sigma_position_m,
+               wq_odo = 1.0 / config.odometry_sigma_rotation_rad;
+  for (std::size_t i = 1; i < n_kf; ++i) {
+    const Eigen::Isometry3d rel = T_odom_cam[i - 1].inverse() * T_odom_cam[i];
+    auto* cost = new ceres::AutoDiffCostFunction<RelativePoseFactor, 6, 7, 7>(
+        new RelativePoseFactor(rel, wp_odo, wq_odo, false, Eigen::Vector3d::UnitZ()));
+    problem.AddResidualBlock(cost, makeLoss(config.odometry_loss), cams[i - 1].data(),
+                             cams[i].data());
+  }
+  std::vector<char> used(n_obj, 0);
+  const double wp = 1.0 / config.measurement_sigma_position_m,
+               wq = 1.0 / config.measurement_sigma_rotation_rad;
+  for (const StageOneMeasurement& m : measurements) {
+    if (m.keyframe < 0 || m.keyframe >= static_cast<int>(n_kf) || m.object < 0 ||
+        m.object >= static_cast<int>(n_obj) || !(m.weight > 0.0)) {
+      continue;
+    }
+    PoseBlock &cam = cams[static_cast<std::size_t>(m.keyframe)],
+              &obj = objs[static_cast<std::size_t>(m.object)];
+    if (!used[static_cast<std::size_t>(m.object)]) {
+      add_pose(obj);
+      used[static_cast<std::size_t>(m.object)] = 1;
+    }
+    const ObjectModel* model = models[static_cast<std::size_t>(m.object)];
+    Eigen::Isometry3d z = m.T_cam_obj;
+    if (model) {
+      // Discrete symmetry: the equivalent closest to the current estimate.
+      const Eigen::Matrix3d R_pred = (cam.get().inverse() * obj.get()).linear();
+      z.linear() = closestSymmetricEquivalent(model->symmetry, R_pred, z.linear());
+    }
+    Eigen::Vector3d axis;
+    const bool free = freeAxis(model, &axis);
+    const double s = std::sqrt(m.weight);
+    auto* cost = new ceres::AutoDiffCostFunction<RelativePoseFactor, 6, 7, 7>(
+        new RelativePoseFactor(z, s * wp, s * wq, free, axis));
+    problem.AddResidualBlock(cost, makeLoss(config.measurement_loss), cam.data(), obj.data());
+  }
+  // The first camera fixes the gauge; outside the window the cameras stay where they are.
+  const std::size_t first_free =
+      config.window_keyframes > 0 && n_kf > static_cast<std::size_t>(config.window_keyframes)
+          ? n_kf - static_cast<std::size_t>(config.window_keyframes)
+          : 1;
+  for (std::size_t i = 0; i < std::max<std::size_t>(1, first_free); ++i) {
+    problem.SetParameterBlockConstant(cams[i].data());
+  }
+
+  // Schur complement: the objects (no factor joins two of them) are eliminated first, the free
+  // cameras of the window remain as one small dense system.
+  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+  for (std::size_t j = 0; j < n_obj; ++j) {
+    if (!used[j]) continue;
+    ordering->AddElementToGroup(objs[j].data(), 0);
+  }
+  for (auto& c : cams) ordering->AddElementToGroup(c.data(), 1);
+  const ceres::Solver::Summary s =
+      solveQuietly(&problem, ceres::DENSE_SCHUR, config.max_iterations, ordering);
+  summary.status = statusOf(s);
+  summary.solved = usable(summary.status);
+  summary.iterations = static_cast<int>(s.iterations.size());
+  summary.initial_cost = s.initial_cost;
+  summary.final_cost = s.final_cost;
+  summary.message = s.BriefReport();
+  if (!summary.solved) return summary;
+  for (std::size_t i = 0; i < n_kf; ++i) (*T_map_cam)[i] = cams[i].get();
+  for (std::size_t j = 0; j < n_obj; ++j)
+    if (used[j]) (*T_map_obj)[j] = objs[j].get();
+  return summary;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Stage II.
+StageTwoSummary optimizeStageTwo(std::vector<Eigen::Isometry3d>* T_world_obj,
+                                 const std::vector<const ObjectModel*>& models,
+                                 const std::vector<Eigen::Isometry3d>& priors,
+                                 const std::vector<FeatureContact>& contacts,
+                                 const PosedModel* ground, const StageTwoConfig& config) {
+  StageTwoSummary summary;
+  const std::size_t n = T_world_obj->size();
+  if (models.size() != n || priors.size() != n) {
+    summary.status = SolveStatus::kBadInput;
+    return summary;
+  }
+  std::vector<PoseBlock> objs(n);
+  for (std::size_t i = 0; i < n; ++i) objs[i].set((*T_world_obj)[i]);
+  PoseBlock ground_block, identity;
+  identity.set(Eigen::Isometry3d::Identity());
+  if (ground) ground_block.set(ground->T_world_obj);
+
+  ceres::Problem::Options problem_options;
+  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  PoseManifold manifold;
+  std::vector<char> in_problem(n, 0);
+  auto block = [&](int index) -> PoseBlock* {
+    if (index < 0) return ground ? &ground_block : nullptr;
+    return index < static_cast<int>(n) ? &objs[static_cast<std::size_t>(index)] : nullptr;
+  };
+  auto model_of = [&](int index) -> const ObjectModel* {
+    if (index < 0) return ground ? ground->model : nullptr;
+    return models[static_cast<std::size_t>(index)];
+  };
+  auto add_object = [&](int index) {
+    if (index < 0 || in_problem[static_cast<std::size_t>(index)]) return;
+    PoseBlock& b = objs[static_cast<std::size_t>(index)];
+    problem.AddParameterBlock(b.data(), 7, &manifold);
+    in_problem[static_cast<std::size_t>(index)] = 1;
+    Eigen::Vector3d axis;
+    const bool free = freeAxis(models[static_cast<std::size_t>(index)], &axis);
+    auto* prior =
+        new ceres::AutoDiffCostFunction<RelativePoseFactor, 6, 7, 7>(new RelativePoseFactor(
+            priors[static_cast<std::size_t>(index)], 1.0 / config.prior_sigma_position_m,
+            1.0 / config.prior_sigma_rotation_rad, free, axis));
+    problem.AddResidualBlock(prior, nullptr, identity.data(), b.data());
+  };
+  bool uses_constants = false;
+  for (const FeatureContact& c : contacts) {
+    PoseBlock *a = block(c.object_a), *b = block(c.object_b);
+    const ObjectModel *ma = model_of(c.object_a), *mb = model_of(c.object_b);
+    if (!a || !b || !ma || !mb || a == b) continue;
+    ContactFactor e;
+    e.type = c.type;
+    e.w_p = 1.0 / config.contact_sigma_distance_m;
+    e.w_q = 1.0 / config.contact_sigma_direction;
+    auto set_feature = [&](const ObjectModel& m, const FeatureRef& f, Eigen::Vector3d* centre,
+                           Eigen::Vector3d* dir, double* radius) {
+      if (f.plane) {
+        if (f.index < 0 || f.index >= static_cast<int>(m.features.planes.size())) return false;
+        const PlaneFeature& p = m.features.planes[static_cast<std::size_t>(f.index)];
+        *centre = p.center, *dir = p.normal, *radius = 0.0;
+      } else {
+        if (f.index < 0 || f.index >= static_cast<int>(m.features.curves.size())) return false;
+        const CurvedFeature& cv = m.features.curves[static_cast<std::size_t>(f.index)];
+        *centre = cv.center, *dir = cv.axis, *radius = cv.radius_m;
+      }
+      return true;
+    };
+    bool swap = c.type == ContactType::kPlaneCurve && !c.feature_a.plane;
+    const FeatureRef& fa = swap ? c.feature_b : c.feature_a;
+    const FeatureRef& fb = swap ? c.feature_a : c.feature_b;
+    if (!set_feature(swap ? *mb : *ma, fa, &e.c_a, &e.n_a, &e.r_a) ||
+        !set_feature(swap ? *ma : *mb, fb, &e.c_b, &e.n_b, &e.r_b)) {
+      continue;
+    }
+    if (swap) std::swap(a, b);
+    add_object(swap ? c.object_b : c.object_a);
+    add_object(swap ? c.object_a : c.object_b);
+    if (a == &ground_block || b == &ground_block) uses_constants = true;
+    if ((a == &ground_block || b == &ground_block) &&
+        !problem.HasParameterBlock(ground_block.data())) {
+      problem.AddParameterBlock(ground_block.data(), 7, &manifold);
+    }
+    auto* cost = new ceres::AutoDiffCostFunction<ContactFactor, 4, 7, 7>(new ContactFactor(e));
+    problem.AddResidualBlock(cost, makeLoss(config.contact_loss), a->data(), b->data());
+    ++summary.contacts;
+  }
+  if (summary.contacts == 0) {
+    summary.status = SolveStatus::kNothingToSolve;  // the priors are the answer
+    summary.solved = true;
+    for (std::size_t i = 0; i < n; ++i) (*T_world_obj)[i] = priors[i];
+    return summary;
+  }
+  problem.SetParameterBlockConstant(identity.data());
+  if (uses_constants) {
+    problem.SetParameterBlockConstant(ground_block.data());
+  }
+  const ceres::Solver::Summary s =
+      solveQuietly(&problem, ceres::SPARSE_NORMAL_CHOLESKY, config.max_iterations);
+  summary.status = statusOf(s);
+  summary.solved = usable(summary.status);
+  summary.iterations = static_cast<int>(s.iterations.size());
+  summary.initial_cost = s.initial_cost;
+  summary.final_cost = s.final_cost;
+  for (std::size_t i = 0; i < n; ++i) {
+    (*T_world_obj)[i] = (summary.solved && in_problem[i]) ? objs[i].get() : priors[i];
+  }
+  return summary;
+}
+
+}  // namespace geofusion

@@ -1,0 +1,159 @@
+#include "geofusion/estimation/relations.h"
+
+#include "geofusion/model/mesh.h"
+#include "geofusion/model/surface_features.h"
+
+#include <pcl/ModelCoefficients.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+#include <pcl/sample_consensus/method_types.h>
+#include <pcl/sample_consensus/model_types.h>
+#include <pcl/segmentation/sac_segmentation.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace geofusion {
+
+SupportPlane estimateSupportPlane(const DepthImageView& depth, const PinholeIntrinsics& K,
+                                  const Eigen::Isometry3d& T_map_cam,
+                                  const Eigen::Vector3d& gravity,
+                                  const SupportPlaneConfig& config) {
+  SupportPlane out;
+  if (!depth.data || depth.width != K.width || depth.height != K.height || !K.valid()) return out;
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
+  const int stride = std::max(1, config.pixel_stride);
+  for (int v = 0; v < K.height; v += stride) {
+    for (int u = 0; u < K.width; u += stride) {
+      const float z = depth.at(u, v);
+      if (!(z > 0.f) || !std::isfinite(z) || z > config.max_range_m) continue;
+      const Eigen::Vector3d p = T_map_cam * K.backProject(u, v, z);
+      cloud->push_back(pcl::PointXYZ(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                                     static_cast<float>(p.z())));
+    }
+  }
+  if (static_cast<int>(cloud->size()) < config.min_inliers) return out;
+  const Eigen::Vector3d up = -gravity.normalized();
+  pcl::SACSegmentation<pcl::PointXYZ> seg;
+  seg.setOptimizeCoefficients(true);
+  seg.setModelType(pcl::SACMODEL_PERPENDICULAR_PLANE);
+  seg.setMethodType(pcl::SAC_RANSAC);
+  seg.setAxis(up.cast<float>());
+  seg.setEpsAngle(config.max_tilt_deg * M_PI / 180.0);
+  seg.setDistanceThreshold(config.distance_threshold_m);
+  seg.setMaxIterations(config.max_iterations);
+  seg.setInputCloud(cloud);
+  pcl::PointIndices inliers;
+  pcl::ModelCoefficients coefficients;
+  seg.segment(inliers, coefficients);
+  if (static_cast<int>(inliers.indices.size()) < config.min_inliers ||
+      coefficients.values.size() != 4) {
+    return out;
+  }
+  Eigen::Vector3d n(coefficients.values[0], coefficients.values[1], coefficients.values[2]);
+  double d = coefficients.values[3];
+  const double norm = n.norm();
+  if (!(norm > 0.0)) return out;
+  n /= norm, d /= norm;
+  if (n.dot(up) < 0) n = -n, d = -d;
+  out.normal = n;
+  out.height = -d;  // n . p + d = 0  =>  n . p = -d
+  // In-plane axes: x along the map x projected on the plane.
+  Eigen::Vector3d ax = Eigen::Vector3d::UnitX() - n * n.x();
+  if (ax.norm() < 1e-3) ax = Eigen::Vector3d::UnitY() - n * n.y();
+  ax.normalize();
+  const Eigen::Vector3d ay = n.cross(ax);
+  out.axes.col(0) = ax, out.axes.col(1) = ay, out.axes.col(2) = n;
+  Eigen::Vector2d lo(1e9, 1e9), hi(-1e9, -1e9);
+  for (int i : inliers.indices) {
+    const Eigen::Vector3d p =
+        cloud->points[static_cast<std::size_t>(i)].getVector3fMap().cast<double>();
+    const Eigen::Vector2d q(p.dot(ax), p.dot(ay));
+    lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
+  }
+  const Eigen::Vector2d mid = 0.5 * (lo + hi);
+  out.size = hi - lo;
+  out.centre = ax * mid.x() + ay * mid.y() + n * out.height;
+  out.inliers = static_cast<int>(inliers.indices.size());
+  out.observations = 1;
+  out.valid = true;
+  return out;
+}
+
+void fuseSupportPlane(const SupportPlane& observed, SupportPlane* fused,
+                      double max_height_difference_m) {
+  if (!observed.valid) return;
+  if (!fused->valid) {
+    *fused = observed;
+    return;
+  }
+  if (std::abs(observed.height - fused->height) > max_height_difference_m) {
+    // Another surface (the floor, a shelf, a big box top): keep the better supported one.
+    if (observed.inliers > 2 * fused->inliers / std::max(1, fused->observations)) *fused = observed;
+    return;
+  }
+  const double w0 = fused->inliers, w1 = observed.inliers, w = w0 + w1;
+  Eigen::Vector3d n = (w0 * fused->normal + w1 * observed.normal).normalized();
+  const double height = (w0 * fused->height + w1 * observed.height) / w;
+  // Union of the two extents in the fused axes.
+  const Eigen::Vector3d ax = fused->axes.col(0), ay = fused->axes.col(1);
+  Eigen::Vector2d lo(1e9, 1e9), hi(-1e9, -1e9);
+  for (const SupportPlane* p : {static_cast<const SupportPlane*>(fused), &observed}) {
+    for (int sx = -1; sx <= 1; sx += 2) {
+      for (int sy = -1; sy <= 1; sy += 2) {
+        const Eigen::Vector3d corner = p->centre + 0.5 * sx * p->size.x() * p->axes.col(0) +
+                                       0.5 * sy * p->size.y() * p->axes.col(1);
+        const Eigen::Vector2d q(corner.dot(ax), corner.dot(ay));
+        lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
+      }
+    }
+  }
+  Eigen::Vector3d new_ax = (ax - n * n.dot(ax)).normalized();
+  fused->normal = n;
+  fused->height = height;
+  fused->axes.col(0) = new_ax;
+  fused->axes.col(1) = n.cross(new_ax);
+  fused->axes.col(2) = n;
+  const Eigen::Vector2d mid = 0.5 * (lo + hi);
+  fused->size = hi - lo;
+  fused->centre = new_ax * mid.x() + fused->axes.col(1) * mid.y() + n * height;
+  fused->inliers = static_cast<int>(std::min(w, 1e9));
+  fused->observations += observed.observations;
+}
+
+std::shared_ptr<ObjectModel> supportPlaneModel(const SupportPlane& plane,
+                                               Eigen::Isometry3d* T_map_model, double thickness_m) {
+  auto model = std::make_shared<ObjectModel>();
+  model->name = "support_plane";
+  const Eigen::Vector3d size(std::max(plane.size.x(), 0.05), std::max(plane.size.y(), 0.05),
+                             thickness_m);
+  model->mesh = makeBox(size);
+  model->extents = size.cast<float>();
+  // Only the top face matters for contacts: one plane feature, outward normal +z.
+  PlaneFeature top;
+  top.center = Eigen::Vector3d(0, 0, 0.5 * thickness_m);
+  top.normal = Eigen::Vector3d::UnitZ();
+  const double hx = 0.5 * size.x(), hy = 0.5 * size.y(), hz = 0.5 * thickness_m;
+  top.boundary = {{-hx, -hy, hz}, {hx, -hy, hz}, {hx, hy, hz}, {-hx, hy, hz}};
+  top.area_m2 = size.x() * size.y();
+  model->features.planes.push_back(top);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = plane.axes;
+  T.translation() = plane.centre - plane.normal * (0.5 * thickness_m);
+  if (T_map_model) *T_map_model = T;
+  return model;
+}
+
+std::vector<FeatureContact> inferRelations(const std::vector<PosedModel>& objects,
+                                           const PosedModel* ground, const Eigen::Vector3d& gravity,
+                                           const ContactConfig& config) {
+  std::vector<PosedModel> all;
+  const int offset = ground ? 1 : 0;
+  if (ground) all.push_back(*ground);
+  all.insert(all.end(), objects.begin(), objects.end());
+  std::vector<FeatureContact> out = findAllContacts(all, gravity, config);
+  for (FeatureContact& c : out) c.object_a -= offset, c.object_b -= offset;
+  return out;
+}
+
+}  // namespace geofusion

@@ -1,0 +1,254 @@
+#include "geofusion/estimation/run_results.h"
+
+#include "geofusion/common/yaml_io.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <stdexcept>
+
+namespace geofusion {
+namespace {
+
+void emitObjects(YAML::Emitter& out, const std::vector<ObjectEstimate>& objects,
+                 const Eigen::Isometry3d& T_map_cam) {
+  out << YAML::Key << "objects" << YAML::Value << YAML::BeginSeq;
+  const Eigen::Isometry3d T_cam_map = T_map_cam.inverse();
+  for (const ObjectEstimate& o : objects) {
+    out << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "id" << YAML::Value << o.id;
+    out << YAML::Key << "class_name" << YAML::Value << (o.model ? o.model->name : "");
+    out << YAML::Key << "class_id" << YAML::Value << (o.model ? o.model->id : -1);
+    out << YAML::Key << "score" << YAML::Value << o.existence;
+    out << YAML::Key << "false_positive" << YAML::Value << o.false_positive;
+    out << YAML::Key << "consistency" << YAML::Value << o.best_consistency;
+    out << YAML::Key << "measurements" << YAML::Value << o.measurements;
+    yaml_io::emitPose(out, "map_object", o.T_map_obj);
+    yaml_io::emitPose(out, "camera_object", T_cam_map * o.T_map_obj);
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+}
+
+void emitContacts(YAML::Emitter& out, const KeyframeResult& r) {
+  out << YAML::Key << "contacts" << YAML::Value << YAML::BeginSeq;
+  for (const FeatureContact& c : r.contacts) {
+    auto id = [&](int index) {
+      return index < 0 || index >= static_cast<int>(r.objects.size())
+                 ? -1
+                 : r.objects[static_cast<std::size_t>(index)].id;
+    };
+    out << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "a" << YAML::Value << id(c.object_a);  // -1: the support plane
+    out << YAML::Key << "b" << YAML::Value << id(c.object_b);
+    out << YAML::Key << "type" << YAML::Value << shortName(c.type);
+    out << YAML::Key << "support" << YAML::Value << c.support;
+    out << YAML::Key << "distance_residual" << YAML::Value << c.distance_residual;
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+}
+
+void emitTimings(YAML::Emitter& out, const StageTimings& t) {
+  out << YAML::Key << "timings_ms" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  out << YAML::Key << "consistency" << YAML::Value << t.consistency_ms;
+  out << YAML::Key << "association" << YAML::Value << t.association_ms;
+  out << YAML::Key << "stage_one" << YAML::Value << t.stage_one_ms;
+  out << YAML::Key << "relations" << YAML::Value << t.relations_ms;
+  out << YAML::Key << "stage_two" << YAML::Value << t.stage_two_ms;
+  out << YAML::Key << "total" << YAML::Value << t.total_ms << YAML::EndMap;
+}
+
+// `stages: {stage_one: converged, stage_two: nothing_to_solve}`: the optimisation stages that ran
+// at this keyframe and how they ended (a failed stage's result was not used).
+void emitStages(YAML::Emitter& out, const KeyframeResult& k) {
+  out << YAML::Key << "stages" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  out << YAML::Key << "stage_one" << YAML::Value << toString(k.stage_one.status);
+  out << YAML::Key << "stage_two" << YAML::Value << toString(k.stage_two.status);
+  out << YAML::EndMap;
+}
+
+void readStages(const YAML::Node& n, KeyframeResult* k) {
+  if (!n) return;  // results written before the stages were reported
+  for (auto [key, report] : {std::pair{"stage_one", &k->stage_one}, {"stage_two", &k->stage_two}}) {
+    if (n[key] && !parseSolveStatus(n[key].as<std::string>(), &report->status)) {
+      throw std::runtime_error(std::string("stages.") + key + ": unknown status '" +
+                               n[key].as<std::string>() + "'");
+    }
+  }
+}
+
+}  // namespace
+
+int failedStages(const RunResults& results) {
+  int failed = 0;
+  auto count = [&](const KeyframeResult& k) {
+    failed += (k.stage_one.failed() ? 1 : 0) + (k.stage_two.failed() ? 1 : 0);
+  };
+  for (const KeyframeResult& k : results.keyframes) count(k);
+  count(results.final_map);
+  return failed;
+}
+
+bool writeRunResults(const std::string& path, const RunResults& r, std::string* error) {
+  YAML::Emitter out;
+  out.SetDoublePrecision(10);
+  out << YAML::BeginMap;
+  out << YAML::Key << "format" << YAML::Value << "geofusion_results_v1";
+  out << YAML::Key << "method" << YAML::Value << r.method;
+  out << YAML::Key << "source" << YAML::Value << r.source;
+  out << YAML::Key << "model_set" << YAML::Value << r.model_set;
+  out << YAML::Key << "recording_duration_s" << YAML::Value << r.recording_duration_s;
+  out << YAML::Key << "wall_time_s" << YAML::Value << r.wall_time_s;
+  out << YAML::Key << "peak_rss_mb" << YAML::Value << r.peak_rss_mb;
+  out << YAML::Key << "realtime_factor" << YAML::Value
+      << (r.recording_duration_s > 0 ? r.wall_time_s / r.recording_duration_s : 0.0);
+  out << YAML::Key << "frames_seen" << YAML::Value << r.frames_seen;
+  out << YAML::Key << "frames_skipped" << YAML::Value << r.frames_skipped;
+  out << YAML::Key << "keyframes" << YAML::Value << YAML::BeginSeq;
+  for (const KeyframeResult& k : r.keyframes) {
+    out << YAML::BeginMap;
+    out << YAML::Key << "index" << YAML::Value << k.keyframe;
+    char stamp[32];
+    std::snprintf(stamp, sizeof(stamp), "%.9f", k.stamp_s);
+    out << YAML::Key << "stamp" << YAML::Value << stamp;
+    yaml_io::emitPose(out, "map_camera", k.T_map_cam);
+    emitTimings(out, k.timings);
+    emitStages(out, k);
+    out << YAML::Key << "removed_ids" << YAML::Value << YAML::Flow << k.removed_ids;
+    emitObjects(out, k.objects, k.T_map_cam);
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+  out << YAML::Key << "final_map" << YAML::Value << YAML::BeginMap;
+  emitTimings(out, r.final_map.timings);
+  emitStages(out, r.final_map);
+  emitObjects(out, r.final_map.objects, r.final_map.T_map_cam);
+  emitContacts(out, r.final_map);
+  if (r.support_plane.valid) {
+    const Eigen::Vector3d& n = r.support_plane.normal;
+    out << YAML::Key << "support_plane" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "normal" << YAML::Value << YAML::Flow << YAML::BeginSeq << n.x() << n.y()
+        << n.z() << YAML::EndSeq;
+    out << YAML::Key << "height" << YAML::Value << r.support_plane.height << YAML::EndMap;
+  }
+  out << YAML::EndMap;
+  out << YAML::Key << "trajectory" << YAML::Value << YAML::BeginSeq;
+  for (std::size_t i = 0; i < r.trajectory.size(); ++i) {
+    out << YAML::Flow << YAML::BeginMap;
+    char stamp[32];
+    std::snprintf(stamp, sizeof(stamp), "%.9f",
+                  i < r.trajectory_stamps.size() ? r.trajectory_stamps[i] : 0.0);
+    out << YAML::Key << "stamp" << YAML::Value << stamp;
+    yaml_io::emitPose(out, "map_camera", r.trajectory[i]);
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq << YAML::EndMap;
+  return yaml_io::writeAtomically(
+      path, "# GeoFusion run results (docs/results.md). Poses [x, y, z, qx, qy, qz, qw].\n", out,
+      error);
+}
+
+namespace {
+
+std::vector<ObjectEstimate> readObjects(const YAML::Node& list, const ModelSet& models) {
+  std::vector<ObjectEstimate> objects;
+  for (const YAML::Node& o : list) {
+    ObjectEstimate e;
+    e.id = o["id"].as<int>();
+    const std::string name = o["class_name"].as<std::string>();
+    for (const auto& m : models.models())
+      if (m->name == name) e.model = m;
+    if (!e.model) throw std::runtime_error("class '" + name + "' is not in the model set");
+    e.existence = o["score"].as<double>();
+    e.false_positive = o["false_positive"].as<double>();
+    e.best_consistency = o["consistency"].as<double>();
+    e.measurements = o["measurements"].as<int>();
+    e.T_map_obj = yaml_io::parsePose(o["map_object"], "map_object");
+    objects.push_back(e);
+  }
+  return objects;
+}
+
+StageTimings readTimings(const YAML::Node& t) {
+  StageTimings s;
+  s.consistency_ms = t["consistency"].as<double>();
+  s.association_ms = t["association"].as<double>();
+  s.stage_one_ms = t["stage_one"].as<double>();
+  s.relations_ms = t["relations"].as<double>();
+  s.stage_two_ms = t["stage_two"].as<double>();
+  s.total_ms = t["total"].as<double>();
+  return s;
+}
+
+}  // namespace
+
+bool readRunResults(const std::string& path, const ModelSet& models, RunResults* results,
+                    std::string* error) {
+  try {
+    const YAML::Node root = YAML::LoadFile(path);
+    if (root["format"].as<std::string>("") != "geofusion_results_v1") {
+      throw std::runtime_error("not a geofusion_results_v1 file");
+    }
+    RunResults r;
+    r.method = root["method"].as<std::string>();
+    r.source = root["source"].as<std::string>("");
+    r.model_set = root["model_set"].as<std::string>("");
+    r.recording_duration_s = root["recording_duration_s"].as<double>();
+    r.wall_time_s = root["wall_time_s"].as<double>();
+    r.peak_rss_mb = root["peak_rss_mb"].as<double>(0.0);
+    r.frames_seen = root["frames_seen"].as<int>();
+    r.frames_skipped = root["frames_skipped"].as<int>();
+    for (const YAML::Node& k : root["keyframes"]) {
+      KeyframeResult kr;
+      kr.keyframe = k["index"].as<int>();
+      kr.stamp_s = k["stamp"].as<double>();
+      kr.T_map_cam = yaml_io::parsePose(k["map_camera"], "map_camera");
+      kr.timings = readTimings(k["timings_ms"]);
+      readStages(k["stages"], &kr);
+      kr.removed_ids = k["removed_ids"].as<std::vector<int>>();
+      kr.objects = readObjects(k["objects"], models);
+      r.keyframes.push_back(std::move(kr));
+    }
+    const YAML::Node fm = root["final_map"];
+    r.final_map.timings = readTimings(fm["timings_ms"]);
+    readStages(fm["stages"], &r.final_map);
+    r.final_map.objects = readObjects(fm["objects"], models);
+    if (!r.keyframes.empty()) r.final_map.T_map_cam = r.keyframes.back().T_map_cam;
+    auto index = [&](int id) {
+      if (id == -1) return -1;
+      for (std::size_t i = 0; i < r.final_map.objects.size(); ++i)
+        if (r.final_map.objects[i].id == id) return static_cast<int>(i);
+      throw std::runtime_error("contact refers to object " + std::to_string(id) +
+                               ", which is not in the final map");
+    };
+    for (const YAML::Node& c : fm["contacts"]) {
+      FeatureContact fc;
+      fc.object_a = index(c["a"].as<int>());
+      fc.object_b = index(c["b"].as<int>());
+      fc.type = contactTypeOfShortName(c["type"].as<std::string>());
+      fc.support = c["support"].as<bool>();
+      fc.distance_residual = c["distance_residual"].as<double>();
+      r.final_map.contacts.push_back(fc);
+    }
+    if (const YAML::Node sp = fm["support_plane"]) {
+      r.support_plane.valid = true;
+      r.support_plane.normal = Eigen::Vector3d(
+          sp["normal"][0].as<double>(), sp["normal"][1].as<double>(), sp["normal"][2].as<double>());
+      r.support_plane.height = sp["height"].as<double>();
+    }
+    for (const YAML::Node& t : root["trajectory"]) {
+      r.trajectory_stamps.push_back(t["stamp"].as<double>());
+      r.trajectory.push_back(yaml_io::parsePose(t["map_camera"], "trajectory map_camera"));
+    }
+    *results = std::move(r);
+    return true;
+  } catch (const std::exception& e) {
+    if (error) *error = path + ": " + e.what();
+    return false;
+  }
+}
+
+}  // namespace geofusion

@@ -1,0 +1,467 @@
+#include "geofusion/estimation/scene_estimator.h"
+
+#include "geofusion/model/collision.h"
+#include "geofusion/render/consistency.h"
+#include "geofusion/render/renderer.h"
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+
+namespace geofusion {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+}  // namespace
+
+const char* toString(Method method) {
+  switch (method) {
+    case Method::kFrameByFrame: return "FbF";
+    case Method::kBaselineSlam: return "B-SLAM";
+    case Method::kRobustFrontEnd: return "R-Front";
+    default: return "GeoFusion";
+  }
+}
+
+bool parseMethod(const std::string& name, Method* method) {
+  std::string n;
+  for (char c : name)
+    if (c != '-' && c != '_') n += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (n == "fbf" || n == "framebyframe")
+    *method = Method::kFrameByFrame;
+  else if (n == "bslam")
+    *method = Method::kBaselineSlam;
+  else if (n == "rfront")
+    *method = Method::kRobustFrontEnd;
+  else if (n == "geofusion")
+    *method = Method::kGeoFusion;
+  else
+    return false;
+  return true;
+}
+
+MethodStages stagesOf(Method method) {
+  MethodStages s;
+  switch (method) {
+    case Method::kFrameByFrame: s.map_is_keyframe_detections = true; break;
+    case Method::kBaselineSlam: s.stage_one = true; break;
+    case Method::kRobustFrontEnd: s.geometric_consistency = s.false_positive_removal = true; break;
+    case Method::kGeoFusion:
+      s.geometric_consistency = s.false_positive_removal = true;
+      s.stage_one = s.relations_and_stage_two = true;
+      break;
+  }
+  return s;
+}
+
+SceneEstimator::SceneEstimator(const ModelSet& models, const EstimatorConfig& config,
+                               std::shared_ptr<OffscreenRenderer> renderer)
+    : config_(config), stages_(stagesOf(config.method)) {
+  for (const auto& m : models.models()) models_[m->name] = m;
+  if (!renderer) renderer = std::make_shared<OffscreenRenderer>();
+  scorer_ = std::make_unique<ConsistencyScorer>(std::move(renderer), config.consistency);
+  collider_ = std::make_unique<HullCollider>();
+}
+
+SceneEstimator::~SceneEstimator() = default;
+
+void SceneEstimator::setConfig(const EstimatorConfig& config) {
+  const Method method = config_.method;
+  config_ = config;
+  config_.method = method;
+  scorer_->setConfig(config.consistency);
+}
+
+void SceneEstimator::reset() {
+  tracks_.clear();
+  T_map_cam_.clear();
+  T_odom_cam_.clear();
+  stamps_.clear();
+  support_ = SupportPlane();
+  support_model_.reset();
+  contacts_.clear();
+  frame_objects_.clear();
+}
+
+Eigen::Isometry3d SceneEstimator::T_map_odom() const {
+  if (T_map_cam_.empty()) return Eigen::Isometry3d::Identity();
+  return T_map_cam_.back() * T_odom_cam_.back().inverse();
+}
+
+const Eigen::Isometry3d& SceneEstimator::reportedPose(const Track& track) const {
+  return stages_.relations_and_stage_two ? track.T_refined : track.T_stage_one;
+}
+
+ObjectEstimate SceneEstimator::estimateOf(const Track& track) const {
+  ObjectEstimate e;
+  e.id = track.id;
+  e.model = track.model;
+  e.T_map_obj = reportedPose(track);
+  e.measurements = static_cast<int>(track.observations.size());
+  e.best_consistency = track.best_consistency;
+  e.false_positive = falsePositiveScore(track.best_consistency, e.measurements);
+  e.existence = 1.0 - e.false_positive;
+  e.first_keyframe = track.first_keyframe;
+  e.last_keyframe = track.last_keyframe;
+  return e;
+}
+
+std::vector<ObjectEstimate> SceneEstimator::objects() const {
+  if (stages_.map_is_keyframe_detections) return frame_objects_;
+  std::vector<ObjectEstimate> out;
+  for (std::size_t j : reportedTracks()) out.push_back(estimateOf(tracks_[j]));
+  return out;
+}
+
+KeyframeResult SceneEstimator::result(int keyframe, double stamp) const {
+  KeyframeResult r;
+  r.keyframe = keyframe;
+  r.stamp_s = stamp;
+  if (!T_map_cam_.empty()) r.T_map_cam = T_map_cam_.back();
+  r.objects = objects();
+  if (stages_.relations_and_stage_two) r.contacts = contacts_;
+  return r;
+}
+
+KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
+  const auto start = Clock::now();
+  KeyframeResult out;
+  const int t = static_cast<int>(T_map_cam_.size());
+  appendCameraPose(kf);
+
+  auto t0 = Clock::now();
+  const ScoredDetections detections = scoreDetections(kf);
+  out.timings.consistency_ms = msSince(t0);
+
+  t0 = Clock::now();
+  std::vector<int> detection_object;
+  if (stages_.map_is_keyframe_detections) {
+    detection_object = mapKeyframeDetections(kf, detections, t);
+  } else {
+    detection_object = associateDetections(kf, detections, t);
+  }
+  if (stages_.false_positive_removal) {
+    std::vector<int> touched;
+    for (int id : detection_object)
+      if (id >= 0) touched.push_back(id);
+    removeFalsePositives(touched, t, &out.removed_ids);
+    mergeOverlapping(&out.removed_ids);
+    for (int& id : detection_object) {
+      if (std::find(out.removed_ids.begin(), out.removed_ids.end(), id) != out.removed_ids.end())
+        id = -1;
+    }
+  }
+  out.timings.association_ms = msSince(t0);
+
+  if (stages_.stage_one && stageOneDue(t)) {
+    t0 = Clock::now();
+    out.stage_one = runStageOne();
+    out.timings.stage_one_ms = msSince(t0);
+    out.ran_stage_one = true;
+  }
+  if (stages_.relations_and_stage_two) out.stage_two = runRelationsAndStageTwo(&kf, &out.timings);
+
+  const KeyframeResult map = result(t, kf.stamp_s);
+  out.keyframe = map.keyframe;
+  out.stamp_s = map.stamp_s;
+  out.T_map_cam = map.T_map_cam;
+  out.objects = map.objects;
+  out.contacts = map.contacts;
+  out.detection_consistency = detections.score;
+  out.detection_object = detection_object;
+  out.skipped_detections = detections.skipped;
+  out.timings.total_ms = msSince(start);
+  return out;
+}
+
+// The camera pose of a new keyframe: chained from the previous estimate by the odometry increment.
+Eigen::Isometry3d SceneEstimator::appendCameraPose(const Keyframe& kf) {
+  const Eigen::Isometry3d T_map_cam =
+      T_map_cam_.empty() ? kf.T_odom_cam
+                         : T_map_cam_.back() * (T_odom_cam_.back().inverse() * kf.T_odom_cam);
+  T_map_cam_.push_back(T_map_cam);
+  T_odom_cam_.push_back(kf.T_odom_cam);
+  stamps_.push_back(kf.stamp_s);
+  return T_map_cam;
+}
+
+// Usable detections (known class, enough score, finite pose) and their scores: the geometric
+// consistency f_gc, or the detector's own score for methods without it.
+SceneEstimator::ScoredDetections SceneEstimator::scoreDetections(const Keyframe& kf) const {
+  ScoredDetections out;
+  out.models.resize(kf.detections.size());
+  out.score.assign(kf.detections.size(), -1.0);
+  for (std::size_t k = 0; k < kf.detections.size(); ++k) {
+    const ObjectMeasurement& d = kf.detections[k];
+    const auto it = models_.find(d.class_name);
+    if (it == models_.end() || d.score < config_.min_detection_score ||
+        !d.T_cam_obj.matrix().allFinite()) {
+      ++out.skipped;
+      continue;
+    }
+    out.models[k] = it->second;
+    if (!stages_.geometric_consistency) {
+      out.score[k] = d.score;
+    } else if (kf.depth.data) {
+      out.score[k] = scorer_->score(it->second, d.T_cam_obj, kf.depth, kf.K).score;
+    } else {
+      out.score[k] = config_.consistency.undetermined_score;
+    }
+    out.usable.push_back(static_cast<int>(k));
+  }
+  return out;
+}
+
+// FbF: the keyframe's usable detections, each an object of its own. Returns each detection's
+// object id (-1: none).
+std::vector<int> SceneEstimator::mapKeyframeDetections(const Keyframe& kf,
+                                                       const ScoredDetections& detections, int t) {
+  std::vector<int> detection_object(kf.detections.size(), -1);
+  frame_objects_.clear();
+  for (int k : detections.usable) {
+    const ObjectMeasurement& d = kf.detections[static_cast<std::size_t>(k)];
+    ObjectEstimate e;
+    e.id = next_id_++;
+    e.model = detections.models[static_cast<std::size_t>(k)];
+    e.T_map_obj = T_map_cam_.back() * d.T_cam_obj;
+    e.existence = d.score;
+    e.false_positive = 1.0 - d.score;
+    e.best_consistency = d.score;
+    e.measurements = 1;
+    e.first_keyframe = e.last_keyframe = t;
+    detection_object[static_cast<std::size_t>(k)] = e.id;
+    frame_objects_.push_back(e);
+  }
+  return detection_object;
+}
+
+// Algorithm 1: each usable detection goes to the object of highest likelihood (one measurement
+// per object), or starts a new object. Returns each detection's object id (-1: none).
+std::vector<int> SceneEstimator::associateDetections(const Keyframe& kf,
+                                                     const ScoredDetections& detections, int t) {
+  const Eigen::Isometry3d& T_map_cam = T_map_cam_.back();
+  const std::vector<int> assignment =
+      associate(associationLikelihood(kf, detections), config_.association);
+  std::vector<int> detection_object(kf.detections.size(), -1);
+  for (std::size_t r = 0; r < detections.usable.size(); ++r) {
+    const std::size_t k = static_cast<std::size_t>(detections.usable[r]);
+    const ObjectMeasurement& d = kf.detections[k];
+    const Observation obs{t, d.T_cam_obj, detections.score[k]};
+    Track& tr = assignment[r] < 0 ? startTrack(detections.models[k], T_map_cam * d.T_cam_obj, t)
+                                  : tracks_[static_cast<std::size_t>(assignment[r])];
+    tr.observations.push_back(obs);
+    tr.last_keyframe = t;
+    // Without stage I (R-Front): the pose of the most consistent measurement, through odometry.
+    if (!stages_.stage_one && obs.consistency >= tr.best_consistency) {
+      tr.T_stage_one = tr.T_refined = T_map_cam * d.T_cam_obj;
+    }
+    tr.best_consistency = std::max(tr.best_consistency, obs.consistency);
+    detection_object[k] = tr.id;
+  }
+  return detection_object;
+}
+
+// Likelihood of detection r (rows: usable detections) being object j: label indicator x score x
+// pose factor of the object's predicted pose in the camera.
+Eigen::MatrixXd SceneEstimator::associationLikelihood(const Keyframe& kf,
+                                                      const ScoredDetections& detections) const {
+  const Eigen::Isometry3d T_cam_map = T_map_cam_.back().inverse();
+  Eigen::MatrixXd likelihood =
+      Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(detections.usable.size()),
+                            static_cast<Eigen::Index>(tracks_.size()));
+  for (std::size_t r = 0; r < detections.usable.size(); ++r) {
+    const std::size_t k = static_cast<std::size_t>(detections.usable[r]);
+    const ObjectMeasurement& d = kf.detections[k];
+    for (std::size_t j = 0; j < tracks_.size(); ++j) {
+      const Track& tr = tracks_[j];
+      if (tr.model->name != d.class_name) continue;
+      const Eigen::Isometry3d predicted = T_cam_map * reportedPose(tr);
+      likelihood(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(j)) =
+          detections.score[k] *
+          poseLikelihood(tr.model->symmetry, predicted, d.T_cam_obj, config_.association);
+    }
+  }
+  return likelihood;
+}
+
+SceneEstimator::Track& SceneEstimator::startTrack(const std::shared_ptr<const ObjectModel>& model,
+                                                  const Eigen::Isometry3d& T_map_obj, int t) {
+  Track tr;
+  tr.id = next_id_++;
+  tr.model = model;
+  tr.T_stage_one = tr.T_refined = T_map_obj;
+  tr.first_keyframe = t;
+  Eigen::Vector3f lo, hi;
+  tr.model->mesh.bounds(&lo, &hi);
+  tr.box_centre = (0.5f * (lo + hi)).cast<double>();
+  tr.box_half = (0.5f * (hi - lo)).cast<double>();
+  tracks_.push_back(tr);
+  return tracks_.back();
+}
+
+bool SceneEstimator::stageOneDue(int t) const {
+  return (t + 1) % std::max(1, config_.stage_one.every_n_keyframes) == 0;
+}
+
+std::vector<std::size_t> SceneEstimator::reportedTracks() const {
+  std::vector<std::size_t> out;
+  for (std::size_t j = 0; j < tracks_.size(); ++j)
+    if (tracks_[j].confirmed || !stages_.false_positive_removal) out.push_back(j);
+  return out;
+}
+
+void SceneEstimator::removeFalsePositives(const std::vector<int>& touched, int keyframe,
+                                          std::vector<int>* removed) {
+  std::vector<Track> kept;
+  for (Track& tr : tracks_) {
+    if (std::find(touched.begin(), touched.end(), tr.id) != touched.end()) {
+      const double f =
+          falsePositiveScore(tr.best_consistency, static_cast<int>(tr.observations.size()));
+      tr.confirmed = f <= config_.association.eps_fp;
+    }
+    // A candidate above eps_fp is not in the map; unseen for long, it is dropped.
+    if (!tr.confirmed &&
+        keyframe - tr.last_keyframe > config_.association.candidate_timeout_keyframes) {
+      removed->push_back(tr.id);
+    } else {
+      kept.push_back(std::move(tr));
+    }
+  }
+  tracks_ = std::move(kept);
+}
+
+void SceneEstimator::mergeOverlapping(std::vector<int>* removed) {
+  bool merged = true;
+  while (merged) {
+    merged = false;
+    for (std::size_t a = 0; a < tracks_.size() && !merged; ++a) {
+      for (std::size_t b = a + 1; b < tracks_.size() && !merged; ++b) {
+        Track &A = tracks_[a], &B = tracks_[b];
+        Eigen::Isometry3d Ta = reportedPose(A), Tb = reportedPose(B);
+        Ta.translation() += Ta.linear() * A.box_centre;
+        Tb.translation() += Tb.linear() * B.box_centre;
+        if (boxCollisionRatio(Ta, A.box_half, Tb, B.box_half) <= config_.association.merge_ratio)
+          continue;
+        // Boxes of neighbours in clutter overlap; real duplicates also interpenetrate.
+        // Thin objects (markers, scissors) cannot interpenetrate by much: the bound scales down
+        // with the thinner object's smallest extent.
+        const double thinnest = 2.0 * std::min(A.box_half.minCoeff(), B.box_half.minCoeff());
+        const double needed = std::min(config_.association.merge_min_penetration_m,
+                                       config_.association.merge_thin_fraction * thinnest);
+        if (collider_->penetration(A.model, reportedPose(A), B.model, reportedPose(B)) < needed)
+          continue;
+        const double fa = falsePositiveScore(A.best_consistency,
+                                             static_cast<int>(A.observations.size())),
+                     fb = falsePositiveScore(B.best_consistency,
+                                             static_cast<int>(B.observations.size()));
+        // The one with the higher false-positive score goes into the other.
+        const std::size_t keep = fa <= fb ? a : b, drop = fa <= fb ? b : a;
+        Track &K = tracks_[keep], &D = tracks_[drop];
+        if (K.model->name == D.model->name) {
+          // Keep one measurement per keyframe: the kept object's own wins.
+          for (const Observation& o : D.observations) {
+            const bool clash =
+                std::any_of(K.observations.begin(), K.observations.end(),
+                            [&](const Observation& x) { return x.keyframe == o.keyframe; });
+            if (!clash) K.observations.push_back(o);
+          }
+          std::sort(
+              K.observations.begin(), K.observations.end(),
+              [](const Observation& x, const Observation& y) { return x.keyframe < y.keyframe; });
+          K.best_consistency = std::max(K.best_consistency, D.best_consistency);
+          K.first_keyframe = std::min(K.first_keyframe, D.first_keyframe);
+          K.last_keyframe = std::max(K.last_keyframe, D.last_keyframe);
+        }
+        removed->push_back(D.id);
+        tracks_.erase(tracks_.begin() + static_cast<std::ptrdiff_t>(drop));
+        merged = true;
+      }
+    }
+  }
+}
+
+StageReport SceneEstimator::runStageOne() {
+  std::vector<Eigen::Isometry3d> objects;
+  std::vector<const ObjectModel*> models;
+  std::vector<StageOneMeasurement> measurements;
+  const std::vector<std::size_t> reported = reportedTracks();
+  for (std::size_t i = 0; i < reported.size(); ++i) {
+    const Track& tr = tracks_[reported[i]];
+    objects.push_back(tr.T_stage_one);
+    models.push_back(tr.model.get());
+    for (const Observation& o : tr.observations) {
+      measurements.push_back({o.keyframe, static_cast<int>(i), o.T_cam_obj, 1.0});
+    }
+  }
+  const StageOneSummary s =
+      optimizeStageOne(&T_map_cam_, T_odom_cam_, &objects, models, measurements, config_.stage_one);
+  if (s.solved) {
+    for (std::size_t i = 0; i < reported.size(); ++i) tracks_[reported[i]].T_stage_one = objects[i];
+  }
+  return {s.status, s.iterations, s.initial_cost, s.final_cost};
+}
+
+StageReport SceneEstimator::runRelationsAndStageTwo(const Keyframe* kf, StageTimings* timings) {
+  auto t0 = Clock::now();
+  if (kf && kf->depth.data) {
+    fuseSupportPlane(estimateSupportPlane(kf->depth, kf->K, T_map_cam_.back(), config_.gravity,
+                                          config_.support_plane),
+                     &support_);
+    if (support_.valid) {
+      support_model_ =
+          supportPlaneModel(support_, &T_map_support_, config_.support_plane.thickness_m);
+    }
+  }
+  // Relations from the refined poses of the previous keyframe (new objects: their stage I pose).
+  const std::vector<std::size_t> reported = reportedTracks();
+  std::vector<PosedModel> posed;
+  for (std::size_t j : reported) posed.push_back({tracks_[j].model.get(), tracks_[j].T_refined});
+  PosedModel ground{support_model_.get(), T_map_support_};
+  contacts_ =
+      inferRelations(posed, support_model_ ? &ground : nullptr, config_.gravity, config_.contacts);
+  if (timings) timings->relations_ms = msSince(t0);
+
+  t0 = Clock::now();
+  std::vector<Eigen::Isometry3d> poses, priors;
+  std::vector<const ObjectModel*> models;
+  for (std::size_t j : reported) {
+    poses.push_back(tracks_[j].T_refined);
+    priors.push_back(tracks_[j].T_stage_one);
+    models.push_back(tracks_[j].model.get());
+  }
+  const StageTwoSummary s = optimizeStageTwo(&poses, models, priors, contacts_,
+                                             support_model_ ? &ground : nullptr, config_.stage_two);
+  for (std::size_t i = 0; i < reported.size(); ++i) tracks_[reported[i]].T_refined = poses[i];
+  // Candidates follow their stage I / initial pose.
+  for (Track& tr : tracks_)
+    if (!tr.confirmed) tr.T_refined = tr.T_stage_one;
+  if (timings) timings->stage_two_ms = msSince(t0);
+  return {s.status, s.iterations, s.initial_cost, s.final_cost};
+}
+
+KeyframeResult SceneEstimator::finish() {
+  const auto start = Clock::now();
+  StageTimings timings;
+  StageReport stage_one, stage_two;
+  if (stages_.stage_one && !T_map_cam_.empty()) {
+    const auto t0 = Clock::now();
+    stage_one = runStageOne();
+    timings.stage_one_ms = msSince(t0);
+  }
+  if (stages_.relations_and_stage_two) stage_two = runRelationsAndStageTwo(nullptr, &timings);
+  KeyframeResult out =
+      result(static_cast<int>(T_map_cam_.size()) - 1, stamps_.empty() ? 0.0 : stamps_.back());
+  out.ran_stage_one = stages_.stage_one;
+  out.stage_one = stage_one;
+  out.stage_two = stage_two;
+  timings.total_ms = msSince(start);
+  out.timings = timings;
+  return out;
+}
+
+}  // namespace geofusion

@@ -1,0 +1,505 @@
+#include "geofusion/evaluation/run_evaluation.h"
+
+#include "geofusion/evaluation/trajectory_metrics.h"
+
+#include "geofusion/common/atomic_file.h"
+#include "geofusion/evaluation/evaluation.h"
+#include "geofusion/evaluation/metrics.h"
+#include "geofusion/simulation/clutter_scene.h"
+
+#include <Eigen/Geometry>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+#include <tuple>
+
+namespace geofusion {
+
+Box2d projectedBox(const std::vector<Eigen::Vector3f>& points, const Eigen::Isometry3d& T_cam_obj,
+                   const PinholeIntrinsics& K) {
+  Box2d b;
+  b.x0 = b.y0 = std::numeric_limits<double>::infinity();
+  b.x1 = b.y1 = -std::numeric_limits<double>::infinity();
+  bool any = false;
+  for (const auto& p : points) {
+    const Eigen::Vector3d q = T_cam_obj * p.cast<double>();
+    if (!(q.z() > 0.01)) continue;
+    const Eigen::Vector2d uv = K.project(q);
+    b.x0 = std::min(b.x0, uv.x());
+    b.y0 = std::min(b.y0, uv.y());
+    b.x1 = std::max(b.x1, uv.x());
+    b.y1 = std::max(b.y1, uv.y());
+    any = true;
+  }
+  if (!any) return Box2d();
+  b.x0 = std::clamp(b.x0, 0.0, static_cast<double>(K.width));
+  b.x1 = std::clamp(b.x1, 0.0, static_cast<double>(K.width));
+  b.y0 = std::clamp(b.y0, 0.0, static_cast<double>(K.height));
+  b.y1 = std::clamp(b.y1, 0.0, static_cast<double>(K.height));
+  return b.empty() ? Box2d() : b;
+}
+
+double boxIou(const Box2d& a, const Box2d& b) {
+  if (a.empty() || b.empty()) return 0.0;
+  const double w = std::min(a.x1, b.x1) - std::max(a.x0, b.x0);
+  const double h = std::min(a.y1, b.y1) - std::max(a.y0, b.y0);
+  if (w <= 0 || h <= 0) return 0.0;
+  const double inter = w * h;
+  return inter / (a.width() * a.height() + b.width() * b.height() - inter);
+}
+
+namespace {
+
+// A plane n . x = h.
+struct Plane {
+  Eigen::Vector3d n = Eigen::Vector3d::UnitZ();
+  double h = 0.0;
+};
+
+// Height of the object's lowest mesh vertex above the plane (negative: below it).
+double lowestAbove(const ObjectModel& model, const Eigen::Isometry3d& T, const Plane& plane) {
+  double lowest = std::numeric_limits<double>::infinity();
+  const TriangleMesh& mesh = model.collision_hull.empty() ? model.mesh : model.collision_hull;
+  for (const auto& v : mesh.vertices)
+    lowest = std::min(lowest, plane.n.dot(T * v.cast<double>()) - plane.h);
+  return lowest;
+}
+
+double boundingRadius(const ObjectModel& model) {
+  double r = 0.0;
+  for (const auto& v : model.mesh.vertices) r = std::max(r, static_cast<double>(v.norm()));
+  return r;
+}
+
+using ContactKey = std::tuple<int, int, std::string>;  // lower index, higher index, type
+
+ContactKey keyOf(int a, int b, const std::string& type) {
+  return {std::min(a, b), std::max(a, b), type};
+}
+
+// The ground-truth keyframe of a results stamp: the nearest within the tolerance, or null.
+class KeyframeMatcher {
+ public:
+  KeyframeMatcher(const GroundTruth& gt, double tolerance_s) : tolerance_s_(tolerance_s) {
+    for (const GroundTruthFrame& f : gt.frames)
+      if (f.keyframe) keyframes_.push_back(&f);
+  }
+  const GroundTruthFrame* at(double stamp) const {
+    auto it = std::lower_bound(keyframes_.begin(), keyframes_.end(), stamp,
+                               [](const GroundTruthFrame* f, double s) { return f->stamp_s < s; });
+    const GroundTruthFrame* best = nullptr;
+    for (auto c : {it, it == keyframes_.begin() ? it : it - 1}) {
+      if (c == keyframes_.end()) continue;
+      if (std::abs((*c)->stamp_s - stamp) <= tolerance_s_ &&
+          (!best || std::abs((*c)->stamp_s - stamp) < std::abs(best->stamp_s - stamp)))
+        best = *c;
+    }
+    return best;
+  }
+
+ private:
+  double tolerance_s_;
+  std::vector<const GroundTruthFrame*> keyframes_;
+};
+
+// The run's header figures and the COCO categories (classes of the truth and of the estimates).
+void describeRun(const GroundTruth& gt, const RunResults& results, RunEvaluation* ev) {
+  ev->scene = gt.scene_name;
+  ev->method = results.method;
+  ev->image_width = gt.intrinsics.width;
+  ev->image_height = gt.intrinsics.height;
+  std::set<std::pair<int, std::string>> classes;
+  for (const SceneObject& o : gt.scene.objects) classes.insert({o.model->id, o.model->name});
+  for (const KeyframeResult& k : results.keyframes)
+    for (const ObjectEstimate& o : k.objects) classes.insert({o.model->id, o.model->name});
+  ev->categories.assign(classes.begin(), classes.end());
+  ev->recording_duration_s = results.recording_duration_s;
+  ev->wall_time_s = results.wall_time_s;
+  ev->peak_rss_mb = results.peak_rss_mb;
+}
+
+// One keyframe's images for COCO: the true objects' projected boxes (crowd when mostly hidden) and
+// the estimate's boxes, each with its ADD-S against the same-class truths its box overlaps.
+void evaluateKeyframe(const GroundTruth& gt, const GroundTruthFrame& f, const KeyframeResult& k,
+                      const EvaluationConfig& config, AddsEvaluator* adds, RunEvaluation* ev) {
+  const PinholeIntrinsics& K = gt.intrinsics;
+  const int n_objects = static_cast<int>(gt.scene.objects.size());
+  ev->images.emplace_back(k.keyframe, k.stamp_s);
+  ev->timings.push_back(k.timings);
+  const Eigen::Isometry3d T_cam_map_true = f.T_map_optical.inverse();
+  const std::size_t first_truth = ev->ground_truth.size();
+  std::vector<Eigen::Isometry3d> truth_poses;
+  for (int i = 0; i < n_objects; ++i) {
+    const SceneObject& o = gt.scene.objects[static_cast<std::size_t>(i)];
+    const Eigen::Isometry3d T = T_cam_map_true * o.T_world_obj;
+    const Box2d box = projectedBox(o.model->points, T, K);
+    if (box.empty()) continue;
+    GroundTruthBox g;
+    g.id = static_cast<int>(ev->ground_truth.size()) + 1;
+    g.image = k.keyframe;
+    g.class_id = o.model->id;
+    g.box = box;
+    g.object = i;
+    g.visible_fraction = f.visible_fraction[static_cast<std::size_t>(i)];
+    g.crowd = g.visible_fraction < config.min_visible_fraction;
+    ev->ground_truth.push_back(g);
+    truth_poses.push_back(T);
+  }
+  const Eigen::Isometry3d T_cam_map = k.T_map_cam.inverse();
+  for (const ObjectEstimate& o : k.objects) {
+    const Eigen::Isometry3d T = T_cam_map * o.T_map_obj;
+    const Box2d box = projectedBox(o.model->points, T, K);
+    if (box.empty()) continue;
+    DetectionBox d;
+    d.id = static_cast<int>(ev->detections.size()) + 1;
+    d.image = k.keyframe;
+    d.class_id = o.model->id;
+    d.box = box;
+    d.score = o.existence;
+    d.object_id = o.id;
+    for (std::size_t g = first_truth; g < ev->ground_truth.size(); ++g) {
+      const GroundTruthBox& t = ev->ground_truth[g];
+      if (t.crowd || t.class_id != d.class_id || boxIou(t.box, d.box) < config.adds_min_iou)
+        continue;
+      d.adds_m.emplace_back(t.id, (*adds)(o.model->points, T, truth_poses[g - first_truth]));
+    }
+    ev->detections.push_back(std::move(d));
+  }
+}
+
+// The estimated map frame aligned to the true one by the trajectories (Umeyama).
+void alignMapFrame(const RunResults& results, const KeyframeMatcher& frames, RunEvaluation* ev) {
+  std::vector<Eigen::Vector3d> est_positions, true_positions;
+  for (std::size_t i = 0; i < results.trajectory.size(); ++i) {
+    const GroundTruthFrame* f =
+        i < results.trajectory_stamps.size() ? frames.at(results.trajectory_stamps[i]) : nullptr;
+    if (!f) continue;
+    est_positions.push_back(results.trajectory[i].translation());
+    true_positions.push_back(f->T_map_optical.translation());
+  }
+  ev->T_true_est = alignTrajectories(est_positions, true_positions, &ev->alignment_rmse_m);
+}
+
+// The final map, aligned, matched to the true objects by ADD-S.
+MapScore evaluateFinalMap(const GroundTruth& gt, const std::vector<ObjectEstimate>& map,
+                          const EvaluationConfig& config, RunEvaluation* ev) {
+  std::vector<ObjectEstimate> aligned = map;
+  for (ObjectEstimate& o : aligned) o.T_map_obj = ev->T_true_est * o.T_map_obj;
+  const MapScore score = scoreMap(gt.scene, aligned, config.match_max_adds_m);
+  const int n_objects = static_cast<int>(gt.scene.objects.size());
+  ev->map_objects = static_cast<int>(map.size());
+  ev->map_matched = score.true_positives;
+  ev->true_objects = n_objects;
+  ev->map_adds_m = score.adds_m;
+  for (int i = 0; i < n_objects; ++i) {
+    const SceneObject& o = gt.scene.objects[static_cast<std::size_t>(i)];
+    ev->graph_true_objects.push_back({i, o.model->name, o.T_world_obj.translation(), -1});
+  }
+  for (std::size_t j = 0; j < aligned.size(); ++j) {
+    ev->graph_estimated_objects.push_back({aligned[j].id, aligned[j].model->name,
+                                           aligned[j].T_map_obj.translation(), score.match[j]});
+  }
+  return score;
+}
+
+// Contact graphs: support contacts, as (object pair, type) with the table as -1; an estimated
+// contact is correct when both its objects matched and the truth has it.
+void evaluateContactGraph(const GroundTruth& gt, const RunResults& results, const MapScore& score,
+                          RunEvaluation* ev) {
+  const std::vector<ObjectEstimate>& map = results.final_map.objects;
+  std::set<ContactKey> true_keys;
+  std::set<int> matched_truth(score.match.begin(), score.match.end());
+  matched_truth.insert(-1);
+  for (const FeatureContact& c : gt.scene.contacts) {
+    if (!c.support) continue;
+    const ContactKey key = keyOf(c.object_a, c.object_b, shortName(c.type));
+    if (!true_keys.insert(key).second) continue;
+    ev->graph_true_contacts.push_back({c.object_a, c.object_b, shortName(c.type), true, true});
+    ev->true_contacts_between_matched +=
+        matched_truth.count(c.object_a) && matched_truth.count(c.object_b);
+  }
+  ev->true_contacts = static_cast<int>(true_keys.size());
+  ev->has_contacts = results.method == toString(Method::kGeoFusion);
+  if (!ev->has_contacts) return;
+  std::set<ContactKey> seen;
+  auto truthOf = [&](int index) {
+    return index < 0 ? -1 : score.match[static_cast<std::size_t>(index)];
+  };
+  auto idOf = [&](int index) { return index < 0 ? -1 : map[static_cast<std::size_t>(index)].id; };
+  for (const FeatureContact& c : results.final_map.contacts) {
+    if (!c.support) continue;
+    const int a = truthOf(c.object_a), b = truthOf(c.object_b);
+    const bool matched = (c.object_a < 0 || a >= 0) && (c.object_b < 0 || b >= 0);
+    // Contacts of unmatched objects are wrong; duplicates (two features) count once.
+    const ContactKey key =
+        matched ? keyOf(a, b, shortName(c.type))
+                : keyOf(-2 - idOf(c.object_a), -2 - idOf(c.object_b), shortName(c.type));
+    if (!seen.insert(key).second) continue;
+    const bool correct = matched && true_keys.count(key);
+    ev->correct_contacts += correct;
+    ev->graph_estimated_contacts.push_back(
+        {idOf(c.object_a), idOf(c.object_b), shortName(c.type), true, correct});
+  }
+  ev->estimated_contacts = static_cast<int>(seen.size());
+}
+
+// The table in the estimate's own frame: the method's own support plane when it has one, else the
+// true table brought into the estimate's frame.
+Plane tableOf(const GroundTruth& gt, const RunResults& results, const RunEvaluation& ev) {
+  Plane table;
+  if (results.support_plane.valid) {
+    table.n = results.support_plane.normal.normalized();
+    table.h = results.support_plane.height;
+  } else {
+    const Eigen::Isometry3d T_est_true = ev.T_true_est.inverse();
+    table.n = T_est_true.linear() * Eigen::Vector3d::UnitZ();
+    table.h = table.n.dot(T_est_true * Eigen::Vector3d(0, 0, gt.scene.table.height_m));
+  }
+  return table;
+}
+
+// Physical plausibility in the estimate's own frame: interpenetration of touching pairs and of
+// objects with the table, and the gaps of the true support contacts between matched objects.
+void evaluatePlausibility(const GroundTruth& gt, const RunResults& results, const MapScore& score,
+                          const EvaluationConfig& config, RunEvaluation* ev) {
+  const std::vector<ObjectEstimate>& map = results.final_map.objects;
+  const Plane table = tableOf(gt, results, *ev);
+  HullCollider collider;
+  std::vector<double> radius;
+  for (const ObjectEstimate& o : map) radius.push_back(boundingRadius(*o.model));
+  for (std::size_t i = 0; i < map.size(); ++i) {
+    const double low = lowestAbove(*map[i].model, map[i].T_map_obj, table);
+    if (low < config.touch_distance_m) ev->penetration_m.push_back(std::max(0.0, -low));
+    for (std::size_t j = i + 1; j < map.size(); ++j) {
+      const double centres =
+          (map[i].T_map_obj.translation() - map[j].T_map_obj.translation()).norm();
+      if (centres > radius[i] + radius[j] + config.touch_distance_m) continue;
+      const double depth =
+          collider.penetration(map[i].model, map[i].T_map_obj, map[j].model, map[j].T_map_obj);
+      if (depth > 0.0 || collider.distance(map[i].model, map[i].T_map_obj, map[j].model,
+                                           map[j].T_map_obj) < config.touch_distance_m)
+        ev->penetration_m.push_back(depth);
+    }
+  }
+  std::map<int, std::size_t> estimate_of;  // true index -> map index
+  for (std::size_t j = 0; j < score.match.size(); ++j)
+    if (score.match[j] >= 0) estimate_of[score.match[j]] = j;
+  for (const GraphContact& c : ev->graph_true_contacts) {
+    if (!estimate_of.count(c.b) || (c.a >= 0 && !estimate_of.count(c.a))) continue;
+    const ObjectEstimate& b = map[estimate_of[c.b]];
+    if (c.a < 0) {
+      ev->gap_m.push_back(std::max(0.0, lowestAbove(*b.model, b.T_map_obj, table)));
+    } else {
+      const ObjectEstimate& a = map[estimate_of[c.a]];
+      ev->gap_m.push_back(collider.distance(a.model, a.T_map_obj, b.model, b.T_map_obj));
+    }
+  }
+}
+
+}  // namespace
+
+bool evaluateRun(const GroundTruth& gt, const RunResults& results, const EvaluationConfig& config,
+                 RunEvaluation* evaluation, std::string* error) {
+  RunEvaluation ev;
+  describeRun(gt, results, &ev);
+  const KeyframeMatcher frames(gt, config.stamp_tolerance_s);
+  AddsEvaluator adds;
+  for (const KeyframeResult& k : results.keyframes) {
+    const GroundTruthFrame* f = frames.at(k.stamp_s);
+    if (!f || f->visible_fraction.size() != gt.scene.objects.size()) {
+      ++ev.unmatched_keyframes;
+      continue;
+    }
+    evaluateKeyframe(gt, *f, k, config, &adds, &ev);
+  }
+  if (ev.images.empty()) {
+    if (error) *error = "no keyframe of the results is a keyframe of the ground truth";
+    return false;
+  }
+  alignMapFrame(results, frames, &ev);
+  const MapScore score = evaluateFinalMap(gt, results.final_map.objects, config, &ev);
+  evaluateContactGraph(gt, results, score, &ev);
+  evaluatePlausibility(gt, results, score, config, &ev);
+  *evaluation = std::move(ev);
+  return true;
+}
+
+namespace {
+
+nlohmann::json boxJson(const Box2d& b) {
+  return nlohmann::json::array({b.x0, b.y0, b.width(), b.height()});
+}
+
+double mean(const std::vector<double>& v) {
+  double s = 0.0;
+  for (double x : v) s += x;
+  return v.empty() ? 0.0 : s / static_cast<double>(v.size());
+}
+
+double maxOf(const std::vector<double>& v) {
+  return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end());
+}
+
+std::vector<double> scaled(const std::vector<double>& v, double k) {
+  std::vector<double> out;
+  for (double x : v) out.push_back(k * x);
+  return out;
+}
+
+}  // namespace
+
+bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::string* error) {
+  using nlohmann::json;
+  json j;
+  j["format"] = "geofusion_evaluation_v1";
+  j["scene"] = e.scene;
+  j["method"] = e.method;
+  j["image_size"] = {e.image_width, e.image_height};
+  j["categories"] = json::array();
+  for (const auto& c : e.categories)
+    j["categories"].push_back({{"id", c.first}, {"name", c.second}});
+  j["images"] = json::array();
+  for (const auto& i : e.images) j["images"].push_back({{"id", i.first}, {"stamp", i.second}});
+  j["unmatched_keyframes"] = e.unmatched_keyframes;
+  j["annotations"] = json::array();
+  for (const GroundTruthBox& g : e.ground_truth) {
+    j["annotations"].push_back({{"id", g.id},
+                                {"image_id", g.image},
+                                {"category_id", g.class_id},
+                                {"bbox", boxJson(g.box)},
+                                {"area", g.box.width() * g.box.height()},
+                                {"iscrowd", g.crowd ? 1 : 0},
+                                {"object", g.object},
+                                {"visible_fraction", g.visible_fraction}});
+  }
+  j["detections"] = json::array();
+  for (const DetectionBox& d : e.detections) {
+    json adds = json::object();
+    for (const auto& a : d.adds_m) adds[std::to_string(a.first)] = a.second;
+    j["detections"].push_back({{"id", d.id},
+                               {"image_id", d.image},
+                               {"category_id", d.class_id},
+                               {"bbox", boxJson(d.box)},
+                               {"score", d.score},
+                               {"object_id", d.object_id},
+                               {"adds_m", adds}});
+  }
+  json contacts = nullptr;
+  if (e.has_contacts) {
+    contacts = {{"true", e.true_contacts},
+                {"estimated", e.estimated_contacts},
+                {"correct", e.correct_contacts},
+                {"true_between_matched", e.true_contacts_between_matched}};
+  }
+  j["final_map"] = {{"objects", e.map_objects},
+                    {"matched", e.map_matched},
+                    {"true_objects", e.true_objects},
+                    {"adds_m", e.map_adds_m},
+                    {"alignment_rmse_m", e.alignment_rmse_m},
+                    {"contacts", contacts},
+                    {"penetration_mm", scaled(e.penetration_m, 1000.0)},
+                    {"gap_mm", scaled(e.gap_m, 1000.0)}};
+  json timings = json::object();
+  auto series = [&](const char* name, double StageTimings::*field) {
+    std::vector<double> v;
+    for (const StageTimings& t : e.timings) v.push_back(t.*field);
+    timings[name] = v;
+  };
+  series("consistency", &StageTimings::consistency_ms);
+  series("association", &StageTimings::association_ms);
+  series("stage_one", &StageTimings::stage_one_ms);
+  series("relations", &StageTimings::relations_ms);
+  series("stage_two", &StageTimings::stage_two_ms);
+  series("total", &StageTimings::total_ms);
+  j["timings_ms"] = timings;
+  j["recording_duration_s"] = e.recording_duration_s;
+  j["wall_time_s"] = e.wall_time_s;
+  j["realtime_factor"] = e.recording_duration_s > 0 ? e.wall_time_s / e.recording_duration_s : 0.0;
+  j["peak_rss_mb"] = e.peak_rss_mb;
+  auto objectsJson = [](const std::vector<GraphObject>& list, bool estimated) {
+    json out = json::array();
+    for (const GraphObject& o : list) {
+      json x = {{estimated ? "id" : "index", o.id},
+                {"class_name", o.class_name},
+                {"xy", {o.position.x(), o.position.y()}},
+                {"z", o.position.z()}};
+      if (estimated) x["match"] = o.match;
+      out.push_back(x);
+    }
+    return out;
+  };
+  auto contactsJson = [](const std::vector<GraphContact>& list) {
+    json out = json::array();
+    for (const GraphContact& c : list) {
+      out.push_back({{"a", c.a},
+                     {"b", c.b},
+                     {"type", c.type},
+                     {"support", c.support},
+                     {"correct", c.correct}});
+    }
+    return out;
+  };
+  j["contact_graph"] = {{"true_objects", objectsJson(e.graph_true_objects, false)},
+                        {"true_contacts", contactsJson(e.graph_true_contacts)},
+                        {"estimated_objects", objectsJson(e.graph_estimated_objects, true)},
+                        {"estimated_contacts", contactsJson(e.graph_estimated_contacts)}};
+  return writeFileAtomically(
+      path,
+      [&](const std::string& tmp) {
+        std::ofstream file(tmp);
+        file << j.dump() << "\n";
+        return file.good();
+      },
+      error);
+}
+
+std::string summarize(const RunEvaluation& e) {
+  std::vector<double> totals;
+  for (const StageTimings& t : e.timings) totals.push_back(t.total_ms);
+  std::sort(totals.begin(), totals.end());
+  auto quantile = [&](double q) {
+    return totals.empty() ? 0.0
+                          : totals[static_cast<std::size_t>(
+                                std::lround(q * static_cast<double>(totals.size() - 1)))];
+  };
+  std::ostringstream s;
+  char line[256];
+  std::snprintf(line, sizeof(line), "%s on %s: %zu keyframes\n", e.method.c_str(), e.scene.c_str(),
+                e.images.size());
+  s << line;
+  std::snprintf(line, sizeof(line),
+                "  objects: %d in the map, %d of them true (of %d in the scene), %d false; "
+                "ADD-S of the true ones %.1f mm mean\n",
+                e.map_objects, e.map_matched, e.true_objects, e.map_objects - e.map_matched,
+                1000 * mean(e.map_adds_m));
+  s << line;
+  if (e.has_contacts) {
+    std::snprintf(line, sizeof(line),
+                  "  support contacts: %d found, %d of them true; %d true (%d between found "
+                  "objects and the table)\n",
+                  e.estimated_contacts, e.correct_contacts, e.true_contacts,
+                  e.true_contacts_between_matched);
+    s << line;
+  }
+  std::snprintf(line, sizeof(line),
+                "  interpenetration %.1f mm mean, %.1f mm max (%zu touching pairs); gap under "
+                "supported objects %.1f mm mean, %.1f mm max\n",
+                1000 * mean(e.penetration_m), 1000 * maxOf(e.penetration_m), e.penetration_m.size(),
+                1000 * mean(e.gap_m), 1000 * maxOf(e.gap_m));
+  s << line;
+  std::snprintf(line, sizeof(line),
+                "  time a keyframe: %.1f ms median, %.1f ms p95; real-time factor %.2f\n",
+                quantile(0.5), quantile(0.95),
+                e.recording_duration_s > 0 ? e.wall_time_s / e.recording_duration_s : 0.0);
+  s << line;
+  return s.str();
+}
+
+}  // namespace geofusion

@@ -1,0 +1,93 @@
+#include "geofusion/model/collision.h"
+
+#include "geofusion/model/fcl_hull.h"
+#include "geofusion/model/object_model.h"
+
+#include <fcl/narrowphase/collision.h>
+#include <fcl/narrowphase/distance.h>
+
+#include <algorithm>
+#include <map>
+
+namespace geofusion {
+
+TriangleMesh collisionHullOf(const ObjectModel& model) {
+  return model.collision_hull.empty() ? collisionHull(model.mesh) : model.collision_hull;
+}
+
+std::shared_ptr<fcl::CollisionGeometryd> fclHull(const ObjectModel& model) {
+  const TriangleMesh hull = collisionHullOf(model);
+  auto vertices = std::make_shared<std::vector<fcl::Vector3d>>();
+  for (const auto& v : hull.vertices) vertices->push_back(v.cast<double>());
+  auto faces = std::make_shared<std::vector<int>>();
+  for (const auto& t : hull.triangles) {
+    faces->push_back(3);
+    faces->insert(faces->end(), {t[0], t[1], t[2]});
+  }
+  return std::make_shared<fcl::Convexd>(vertices, static_cast<int>(hull.triangles.size()), faces);
+}
+
+double fclPenetration(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b) {
+  fcl::CollisionRequestd request(1, true);
+  request.gjk_solver_type = fcl::GST_LIBCCD;
+  fcl::CollisionResultd result;
+  fcl::collide(a, b, request, result);
+  if (!result.isCollision()) return 0.0;
+  double depth = 0.0;
+  for (std::size_t k = 0; k < result.numContacts(); ++k)
+    depth = std::max(depth, result.getContact(k).penetration_depth);
+  return depth;
+}
+
+double fclDistance(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b) {
+  fcl::DistanceRequestd request;
+  request.gjk_solver_type = fcl::GST_LIBCCD;
+  fcl::DistanceResultd result;
+  fcl::distance(a, b, request, result);
+  return std::max(0.0, result.min_distance);
+}
+
+struct HullCollider::Impl {
+  std::map<std::shared_ptr<const ObjectModel>, std::shared_ptr<fcl::CollisionGeometryd>> hulls;
+  std::shared_ptr<fcl::CollisionGeometryd> hull(const std::shared_ptr<const ObjectModel>& m) {
+    auto it = hulls.find(m);
+    if (it != hulls.end()) return it->second;
+    auto g = fclHull(*m);
+    hulls[m] = g;
+    return g;
+  }
+};
+
+HullCollider::HullCollider() : impl_(std::make_unique<Impl>()) {}
+HullCollider::~HullCollider() = default;
+
+namespace {
+
+// `query` (penetration or distance) of the two models' hulls at their poses; 0 for a null model.
+template <typename Impl, typename Query>
+double onHulls(Impl* impl, const std::shared_ptr<const ObjectModel>& a,
+               const Eigen::Isometry3d& T_world_a, const std::shared_ptr<const ObjectModel>& b,
+               const Eigen::Isometry3d& T_world_b, Query query) {
+  if (!a || !b) return 0.0;
+  fcl::CollisionObjectd oa(impl->hull(a), fcl::Transform3d(T_world_a.matrix()));
+  fcl::CollisionObjectd ob(impl->hull(b), fcl::Transform3d(T_world_b.matrix()));
+  return query(&oa, &ob);
+}
+
+}  // namespace
+
+double HullCollider::penetration(const std::shared_ptr<const ObjectModel>& a,
+                                 const Eigen::Isometry3d& T_world_a,
+                                 const std::shared_ptr<const ObjectModel>& b,
+                                 const Eigen::Isometry3d& T_world_b) {
+  return onHulls(impl_.get(), a, T_world_a, b, T_world_b, fclPenetration);
+}
+
+double HullCollider::distance(const std::shared_ptr<const ObjectModel>& a,
+                              const Eigen::Isometry3d& T_world_a,
+                              const std::shared_ptr<const ObjectModel>& b,
+                              const Eigen::Isometry3d& T_world_b) {
+  return onHulls(impl_.get(), a, T_world_a, b, T_world_b, fclDistance);
+}
+
+}  // namespace geofusion

@@ -1,0 +1,303 @@
+#include "geofusion/model/mesh.h"
+
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <meshoptimizer.h>
+#include <pcl/point_types.h>
+#include <pcl/surface/convex_hull.h>
+#include <Eigen/Geometry>
+#include <assimp/Importer.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+namespace geofusion {
+
+double TriangleMesh::surfaceArea() const {
+  double area = 0.0;
+  for (const auto& t : triangles) {
+    const Eigen::Vector3f a = vertices[t[0]], b = vertices[t[1]], c = vertices[t[2]];
+    area += 0.5 * static_cast<double>((b - a).cross(c - a).norm());
+  }
+  return area;
+}
+
+void TriangleMesh::bounds(Eigen::Vector3f* min, Eigen::Vector3f* max) const {
+  *min = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+  *max = Eigen::Vector3f::Constant(-std::numeric_limits<float>::max());
+  for (const auto& v : vertices) {
+    *min = min->cwiseMin(v);
+    *max = max->cwiseMax(v);
+  }
+}
+
+Eigen::Vector3f TriangleMesh::extents() const {
+  if (vertices.empty()) return Eigen::Vector3f::Zero();
+  Eigen::Vector3f lo, hi;
+  bounds(&lo, &hi);
+  return hi - lo;
+}
+
+TriangleMesh makeBox(const Eigen::Vector3d& size) {
+  TriangleMesh m;
+  const Eigen::Vector3f h = (0.5 * size).cast<float>();
+  // One quad (two triangles) per face, own vertices so each face can carry its own uvs.
+  for (int axis = 0; axis < 3; ++axis) {
+    for (int sign : {-1, 1}) {
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      const int base = static_cast<int>(m.vertices.size());
+      const float corners[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+      for (const auto& c : corners) {
+        Eigen::Vector3f p;
+        p[axis] = sign * h[axis];
+        p[u] = c[0] * h[u];
+        p[v] = c[1] * h[v];
+        m.vertices.push_back(p);
+        m.uvs.emplace_back(0.5f * (c[0] + 1), 0.5f * (c[1] + 1));
+      }
+      // (u, v, axis) is right-handed: counter-clockwise in (u, v) faces +axis.
+      if (sign > 0) {
+        m.triangles.emplace_back(base, base + 1, base + 2);
+        m.triangles.emplace_back(base, base + 2, base + 3);
+      } else {
+        m.triangles.emplace_back(base, base + 2, base + 1);
+        m.triangles.emplace_back(base, base + 3, base + 2);
+      }
+    }
+  }
+  return m;
+}
+
+TriangleMesh makeCylinder(double radius, double height, int segments) {
+  TriangleMesh m;
+  segments = std::max(segments, 3);
+  const float r = static_cast<float>(radius), hz = static_cast<float>(0.5 * height);
+  for (int i = 0; i < segments; ++i) {
+    const double a = 2.0 * M_PI * i / segments;
+    const float x = r * static_cast<float>(std::cos(a)), y = r * static_cast<float>(std::sin(a));
+    m.vertices.emplace_back(x, y, -hz);  // 2i
+    m.vertices.emplace_back(x, y, hz);   // 2i + 1
+    m.uvs.emplace_back(static_cast<float>(i) / segments, 0.f);
+    m.uvs.emplace_back(static_cast<float>(i) / segments, 1.f);
+  }
+  const int bottom = static_cast<int>(m.vertices.size());
+  m.vertices.emplace_back(0.f, 0.f, -hz);
+  const int top = bottom + 1;
+  m.vertices.emplace_back(0.f, 0.f, hz);
+  m.uvs.emplace_back(0.5f, 0.5f);
+  m.uvs.emplace_back(0.5f, 0.5f);
+  for (int i = 0; i < segments; ++i) {
+    const int j = (i + 1) % segments;
+    const int b0 = 2 * i, t0 = 2 * i + 1, b1 = 2 * j, t1 = 2 * j + 1;
+    m.triangles.emplace_back(b0, b1, t1);
+    m.triangles.emplace_back(b0, t1, t0);
+    m.triangles.emplace_back(bottom, b1, b0);
+    m.triangles.emplace_back(top, t0, t1);
+  }
+  return m;
+}
+
+bool loadMesh(const std::string& path, TriangleMesh* mesh, std::string* error) {
+  std::ifstream probe(path);
+  if (!probe) {
+    *error = "mesh file '" + path + "' does not exist or cannot be read";
+    return false;
+  }
+  Assimp::Importer importer;
+  const aiScene* scene =
+      importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                  aiProcess_PreTransformVertices | aiProcess_FindInvalidData);
+  if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || scene->mNumMeshes == 0) {
+    *error = "mesh file '" + path + "' could not be parsed: " + importer.GetErrorString();
+    return false;
+  }
+  TriangleMesh out;
+  for (unsigned mi = 0; mi < scene->mNumMeshes; ++mi) {
+    const aiMesh* am = scene->mMeshes[mi];
+    const int base = static_cast<int>(out.vertices.size());
+    for (unsigned v = 0; v < am->mNumVertices; ++v) {
+      const aiVector3D& p = am->mVertices[v];
+      out.vertices.emplace_back(p.x, p.y, p.z);
+      if (am->HasTextureCoords(0)) {
+        out.uvs.emplace_back(am->mTextureCoords[0][v].x, am->mTextureCoords[0][v].y);
+      }
+    }
+    for (unsigned f = 0; f < am->mNumFaces; ++f) {
+      const aiFace& face = am->mFaces[f];
+      if (face.mNumIndices != 3) continue;  // points and lines
+      out.triangles.emplace_back(base + static_cast<int>(face.mIndices[0]),
+                                 base + static_cast<int>(face.mIndices[1]),
+                                 base + static_cast<int>(face.mIndices[2]));
+    }
+    if (out.texture_path.empty() && am->mMaterialIndex < scene->mNumMaterials) {
+      aiString tex;
+      if (scene->mMaterials[am->mMaterialIndex]->GetTexture(aiTextureType_DIFFUSE, 0, &tex) ==
+          AI_SUCCESS) {
+        const std::string dir = path.substr(0, path.find_last_of('/') + 1);
+        // MTL files often carry trailing blanks after the file name (the YCB-Video ones do).
+        std::string name = tex.C_Str();
+        const auto first = name.find_first_not_of(" \t\r\n");
+        const auto last = name.find_last_not_of(" \t\r\n");
+        name = first == std::string::npos ? std::string() : name.substr(first, last - first + 1);
+        if (!name.empty()) out.texture_path = dir + name;
+      }
+    }
+  }
+  if (out.uvs.size() != out.vertices.size()) out.uvs.clear();
+  for (const auto& v : out.vertices) {
+    if (!v.allFinite()) {
+      *error = "mesh file '" + path + "' has non-finite vertex coordinates";
+      return false;
+    }
+  }
+  if (out.empty()) {
+    *error = "mesh file '" + path + "' has no triangles";
+    return false;
+  }
+  *mesh = std::move(out);
+  return true;
+}
+
+TriangleMesh simplifyMesh(const TriangleMesh& mesh, std::size_t target_triangles,
+                          double max_error_m, double* achieved_error_m) {
+  if (achieved_error_m) *achieved_error_m = 0.0;
+  if (mesh.empty()) return TriangleMesh();
+  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "packed vertices");
+  static_assert(sizeof(Eigen::Vector3i) == 3 * sizeof(unsigned int), "packed triangles");
+  const std::size_t index_count = mesh.triangles.size() * 3;
+  const auto* indices = reinterpret_cast<const unsigned int*>(mesh.triangles.data());
+  // Weld by position so texture seams do not become borders the simplifier must keep.
+  std::vector<unsigned int> remap(mesh.vertices.size());
+  const std::size_t unique =
+      meshopt_generateVertexRemap(remap.data(), indices, index_count, mesh.vertices.data(),
+                                  mesh.vertices.size(), sizeof(Eigen::Vector3f));
+  TriangleMesh out;
+  out.vertices.resize(unique);
+  meshopt_remapVertexBuffer(out.vertices.data(), mesh.vertices.data(), mesh.vertices.size(),
+                            sizeof(Eigen::Vector3f), remap.data());
+  std::vector<unsigned int> welded(index_count);
+  meshopt_remapIndexBuffer(welded.data(), indices, index_count, remap.data());
+
+  std::vector<unsigned int> simplified(index_count);
+  std::size_t kept = index_count;
+  if (mesh.triangles.size() > target_triangles) {
+    const float* positions = reinterpret_cast<const float*>(out.vertices.data());
+    const float scale = meshopt_simplifyScale(positions, unique, sizeof(Eigen::Vector3f));
+    float relative_error = 0.f;
+    kept = meshopt_simplify(simplified.data(), welded.data(), index_count, positions, unique,
+                            sizeof(Eigen::Vector3f), target_triangles * 3,
+                            static_cast<float>(max_error_m / std::max(scale, 1e-9f)), 0,
+                            &relative_error);
+    if (achieved_error_m) *achieved_error_m = static_cast<double>(relative_error * scale);
+  } else {
+    simplified = welded;
+  }
+  simplified.resize(kept);
+  // Drop the vertices no triangle uses any more.
+  const std::size_t used =
+      meshopt_optimizeVertexFetch(out.vertices.data(), simplified.data(), kept, out.vertices.data(),
+                                  unique, sizeof(Eigen::Vector3f));
+  out.vertices.resize(used);
+  out.triangles.resize(kept / 3);
+  std::copy(simplified.begin(), simplified.end(),
+            reinterpret_cast<unsigned int*>(out.triangles.data()));
+  return out;
+}
+
+TriangleMesh convexHull(const std::vector<Eigen::Vector3f>& points) {
+  TriangleMesh out;
+  if (points.size() < 4) return out;
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
+  cloud->reserve(points.size());
+  for (const auto& p : points) cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
+  pcl::ConvexHull<pcl::PointXYZ> hull;
+  hull.setInputCloud(cloud);
+  hull.setDimension(3);
+  pcl::PointCloud<pcl::PointXYZ> hull_cloud;
+  std::vector<pcl::Vertices> polygons;
+  hull.reconstruct(hull_cloud, polygons);
+  if (hull_cloud.size() < 4 || polygons.empty()) return out;
+  for (const auto& p : hull_cloud) out.vertices.emplace_back(p.x, p.y, p.z);
+  Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
+  for (const auto& v : out.vertices) centroid += v;
+  centroid /= static_cast<float>(out.vertices.size());
+  for (const auto& poly : polygons) {
+    // Fan-triangulate (qhull's output is triangulated already; this is for safety), outward.
+    for (std::size_t k = 1; k + 1 < poly.vertices.size(); ++k) {
+      Eigen::Vector3i t(static_cast<int>(poly.vertices[0]), static_cast<int>(poly.vertices[k]),
+                        static_cast<int>(poly.vertices[k + 1]));
+      const Eigen::Vector3f a = out.vertices[t[0]], b = out.vertices[t[1]], c = out.vertices[t[2]];
+      const Eigen::Vector3f n = (b - a).cross(c - a);
+      if (n.squaredNorm() < 1e-24f) continue;
+      if (n.dot((a + b + c) / 3.f - centroid) < 0.f) std::swap(t[1], t[2]);
+      out.triangles.push_back(t);
+    }
+  }
+  return out;
+}
+
+std::vector<Eigen::Vector3f> sampleSurfacePoints(const TriangleMesh& mesh, std::size_t count,
+                                                 std::uint32_t seed) {
+  std::vector<Eigen::Vector3f> out;
+  if (mesh.empty() || count == 0) return out;
+  std::vector<double> cumulative;
+  cumulative.reserve(mesh.triangles.size());
+  double total = 0.0;
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3f a = mesh.vertices[t[0]], b = mesh.vertices[t[1]], c = mesh.vertices[t[2]];
+    total += 0.5 * static_cast<double>((b - a).cross(c - a).norm());
+    cumulative.push_back(total);
+  }
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  out.reserve(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const double pick = uni(rng) * total;
+    const std::size_t ti = static_cast<std::size_t>(
+        std::lower_bound(cumulative.begin(), cumulative.end(), pick) - cumulative.begin());
+    const auto& t = mesh.triangles[std::min(ti, mesh.triangles.size() - 1)];
+    double s = uni(rng), r = uni(rng);
+    if (s + r > 1.0) {
+      s = 1.0 - s;
+      r = 1.0 - r;
+    }
+    const Eigen::Vector3f a = mesh.vertices[t[0]], b = mesh.vertices[t[1]], c = mesh.vertices[t[2]];
+    out.push_back(a + static_cast<float>(s) * (b - a) + static_cast<float>(r) * (c - a));
+  }
+  return out;
+}
+
+bool loadPointsXyz(const std::string& path, std::vector<Eigen::Vector3f>* points,
+                   std::string* error) {
+  std::ifstream in(path);
+  if (!in) {
+    *error = "points file '" + path + "' does not exist or cannot be read";
+    return false;
+  }
+  std::vector<Eigen::Vector3f> out;
+  std::string line;
+  std::size_t line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream ls(line);
+    float x, y, z;
+    if (!(ls >> x >> y >> z) || !std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) {
+      *error = "points file '" + path + "' line " + std::to_string(line_no) +
+               " is not three finite numbers";
+      return false;
+    }
+    out.emplace_back(x, y, z);
+  }
+  if (out.empty()) {
+    *error = "points file '" + path + "' holds no points";
+    return false;
+  }
+  *points = std::move(out);
+  return true;
+}
+
+}  // namespace geofusion

@@ -1,0 +1,214 @@
+#include "geofusion/model/object_model.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+
+namespace geofusion {
+
+namespace {
+
+constexpr std::size_t kSampledPoints = 2620;  // as many as YCB-Video's evaluation sets
+
+Eigen::Vector3d vec3(const YAML::Node& n, const std::string& what) {
+  if (!n.IsSequence() || n.size() != 3) throw std::runtime_error(what + " must be [x, y, z]");
+  return Eigen::Vector3d(n[0].as<double>(), n[1].as<double>(), n[2].as<double>());
+}
+
+std::string resolve(const std::string& dir, const std::string& path) {
+  if (path.empty() || path[0] == '/' || dir.empty()) return path;
+  return dir + "/" + path;
+}
+
+Symmetry parseSymmetry(const YAML::Node& n) {
+  Symmetry s;
+  if (!n || (n.IsScalar() && n.as<std::string>() == "none")) return s;
+  const std::string type = n["type"].as<std::string>();
+  if (type == "continuous") {
+    s.type = Symmetry::Type::kContinuous;
+    s.axis = vec3(n["axis"], "symmetry axis").normalized();
+  } else if (type == "discrete") {
+    s.type = Symmetry::Type::kDiscrete;
+    // rotations: list of {axis: [x, y, z], angle_deg: a}
+    for (const auto& r : n["rotations"]) {
+      const Eigen::Vector3d axis = vec3(r["axis"], "rotation axis").normalized();
+      s.rotations.emplace_back(Eigen::AngleAxisd(r["angle_deg"].as<double>() * M_PI / 180.0, axis));
+    }
+  } else if (type != "none") {
+    throw std::runtime_error("unknown symmetry type '" + type + "'");
+  }
+  return s;
+}
+
+SurfaceFeatures parseFeatures(const YAML::Node& n) {
+  SurfaceFeatures f;
+  for (const auto& p : n["planes"]) {
+    PlaneFeature plane;
+    plane.center = vec3(p["center"], "plane center");
+    plane.normal = vec3(p["normal"], "plane normal").normalized();
+    for (const auto& b : p["boundary"]) plane.boundary.push_back(vec3(b, "plane boundary point"));
+    f.planes.push_back(plane);
+  }
+  for (const auto& c : n["curves"]) {
+    CurvedFeature curve;
+    curve.end_a = vec3(c["end_a"], "curve end_a");
+    curve.end_b = vec3(c["end_b"], "curve end_b");
+    curve.center = 0.5 * (curve.end_a + curve.end_b);
+    curve.axis = (curve.end_b - curve.end_a).normalized();
+    curve.radius_m = c["radius"].as<double>(0.0);
+    f.curves.push_back(curve);
+  }
+  return f;
+}
+
+Symmetry continuousAboutZ() {
+  Symmetry s;
+  s.type = Symmetry::Type::kContinuous;
+  s.axis = Eigen::Vector3d::UnitZ();
+  return s;
+}
+
+Symmetry boxSymmetry() {
+  // A box with three different edge lengths maps onto itself by 180 degrees about each axis.
+  Symmetry s;
+  s.type = Symmetry::Type::kDiscrete;
+  for (const auto& axis :
+       {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()}) {
+    s.rotations.emplace_back(Eigen::AngleAxisd(M_PI, axis));
+  }
+  return s;
+}
+
+}  // namespace
+
+TriangleMesh collisionHull(const TriangleMesh& mesh) {
+  return convexHull(simplifyMesh(mesh, 400, 0.002).vertices);
+}
+
+void ModelSet::add(ObjectModel model, const SurfaceFeatureConfig& feature_config) {
+  model.extents = model.mesh.extents();
+  if (model.points.empty()) model.points = sampleSurfacePoints(model.mesh, kSampledPoints);
+  if (model.features.planes.empty() && model.features.curves.empty()) {
+    model.features = extractSurfaceFeatures(model.mesh, feature_config);
+  }
+  if (model.collision_hull.empty()) model.collision_hull = collisionHull(model.mesh);
+  by_name_[model.name] = models_.size();
+  models_.push_back(std::make_shared<const ObjectModel>(std::move(model)));
+}
+
+const ObjectModel* ModelSet::find(const std::string& name) const {
+  const auto it = by_name_.find(name);
+  return it == by_name_.end() ? nullptr : models_[it->second].get();
+}
+
+const ObjectModel* ModelSet::findById(int id) const {
+  for (const auto& m : models_) {
+    if (m->id == id) return m.get();
+  }
+  return nullptr;
+}
+
+ModelSet ModelSet::builtinPrimitives() {
+  ModelSet set;
+  set.name_ = "primitives";
+  auto box = [&set](const char* name, int id, double x, double y, double z) {
+    ObjectModel m;
+    m.name = name;
+    m.id = id;
+    m.mesh = makeBox(Eigen::Vector3d(x, y, z));
+    m.symmetry = boxSymmetry();
+    set.add(std::move(m));
+  };
+  auto cylinder = [&set](const char* name, int id, double diameter, double height) {
+    ObjectModel m;
+    m.name = name;
+    m.id = id;
+    m.mesh = makeCylinder(0.5 * diameter, height);
+    m.symmetry = continuousAboutZ();
+    set.add(std::move(m));
+  };
+  // Sizes measured on the YCB-Video scans (metres; the bounding boxes of their official
+  // evaluation points); ids in YCB-Video order.
+  cylinder("002_master_chef_can", 1, 0.102, 0.140);
+  box("003_cracker_box", 2, 0.072, 0.164, 0.213);
+  box("004_sugar_box", 3, 0.049, 0.094, 0.176);
+  cylinder("005_tomato_soup_can", 4, 0.067, 0.102);
+  cylinder("007_tuna_fish_can", 6, 0.085, 0.034);
+  box("008_pudding_box", 7, 0.138, 0.128, 0.039);
+  box("009_gelatin_box", 8, 0.089, 0.101, 0.030);
+  box("010_potted_meat_can", 9, 0.101, 0.059, 0.083);
+  cylinder("025_mug", 14, 0.093, 0.081);  // mug-like: the body without its handle
+  box("036_wood_block", 16, 0.090, 0.090, 0.206);
+  box("061_foam_brick", 21, 0.052, 0.078, 0.051);
+  return set;
+}
+
+bool ModelSet::load(const std::string& yaml_path, const std::string& models_dir, ModelSet* set,
+                    std::vector<std::string>* errors) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(yaml_path);
+  } catch (const std::exception& e) {
+    errors->push_back("model set '" + yaml_path + "' cannot be read: " + e.what());
+    return false;
+  }
+  if (!root["classes"] || !root["classes"].IsSequence()) {
+    errors->push_back("model set '" + yaml_path + "' has no 'classes' list");
+    return false;
+  }
+  const std::string yaml_dir = yaml_path.substr(0, yaml_path.find_last_of('/'));
+  const std::string dir = models_dir.empty() ? yaml_dir : models_dir;
+  ModelSet out;
+  out.name_ = root["name"].as<std::string>("unnamed");
+  for (const auto& c : root["classes"]) {
+    std::string name = "<unnamed>";
+    try {
+      name = c["name"].as<std::string>();
+      if (out.find(name)) throw std::runtime_error("class listed twice");
+      ObjectModel m;
+      m.name = name;
+      m.id = c["id"].as<int>();
+      std::string error;
+      if (c["mesh"]) {
+        m.mesh_path = resolve(dir, c["mesh"].as<std::string>());
+        if (!loadMesh(m.mesh_path, &m.mesh, &error)) throw std::runtime_error(error);
+      } else if (c["box"]) {
+        m.mesh = makeBox(vec3(c["box"], "box size"));
+      } else if (c["cylinder"]) {
+        m.mesh = makeCylinder(c["cylinder"]["radius"].as<double>(),
+                              c["cylinder"]["height"].as<double>());
+      } else {
+        throw std::runtime_error("needs 'mesh', 'box' or 'cylinder'");
+      }
+      if (c["points"]) {
+        if (!loadPointsXyz(resolve(dir, c["points"].as<std::string>()), &m.points, &error)) {
+          throw std::runtime_error(error);
+        }
+      }
+      m.symmetry = parseSymmetry(c["symmetry"]);
+      if (c["features"]) m.features = parseFeatures(c["features"]);
+      out.add(std::move(m));
+    } catch (const std::exception& e) {
+      errors->push_back("model set '" + yaml_path + "', class " + name + ": " + e.what() +
+                        "; class left out");
+    }
+  }
+  *set = std::move(out);
+  return true;
+}
+
+bool loadModelSet(const std::string& spec, const std::string& models_dir, ModelSet* models,
+                  std::vector<std::string>* errors) {
+  if (spec == "primitives" || spec.empty()) {
+    *models = ModelSet::builtinPrimitives();
+    return true;
+  }
+  if (!ModelSet::load(spec, models_dir, models, errors)) return false;
+  if (models->size() == 0) {
+    errors->push_back("model set '" + spec + "' has no loadable class");
+    return false;
+  }
+  return true;
+}
+
+}  // namespace geofusion

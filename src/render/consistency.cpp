@@ -1,0 +1,114 @@
+#include "geofusion/render/consistency.h"
+
+#include "geofusion/model/object_model.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace geofusion {
+
+namespace {
+double logistic(double x) {
+  return 1.0 / (1.0 + std::exp(-x));
+}
+}  // namespace
+
+double ModifiedSigmoid::operator()(double x) const {
+  x = std::clamp(x, 0.0, 1.0);
+  const double lo = logistic(-steepness * centre);
+  const double hi = logistic(steepness * (1.0 - centre));
+  if (hi - lo <= 1e-12) return x;  // degenerate (zero steepness): identity
+  return std::clamp((logistic(steepness * (x - centre)) - lo) / (hi - lo), 0.0, 1.0);
+}
+
+ConsistencyResult compareDepth(const RenderedImages& rendered, const DepthImageView& observed,
+                               const PinholeIntrinsics& K, const ConsistencyConfig& config) {
+  ConsistencyResult r;
+  const PixelBox& box = rendered.region;
+  const int stride = std::max(1, config.pixel_stride);
+  const bool inside = observed.data && box.valid() && box.x >= 0 && box.y >= 0 &&
+                      box.x + box.width <= observed.width &&
+                      box.y + box.height <= observed.height &&
+                      rendered.depth.size() == static_cast<std::size_t>(box.area());
+  if (inside) {
+    for (int y = 0; y < box.height; y += stride) {
+      const int v = box.y + y;
+      const double ry = (v - K.cy) / K.fy;
+      const float* row = rendered.depth.data() + static_cast<std::size_t>(y) * box.width;
+      for (int x = 0; x < box.width; x += stride) {
+        const float z_model = row[x];
+        if (!(z_model > 0.f)) continue;
+        ++r.rendered;
+        const int u = box.x + x;
+        const float z_obs = observed.at(u, v);
+        if (!(z_obs > 0.f) || !std::isfinite(z_obs)) {
+          ++r.missing;
+          continue;
+        }
+        // Signed distance along the ray: positive when the observed surface is behind the model.
+        const double rx = (u - K.cx) / K.fx;
+        const double along =
+            (static_cast<double>(z_obs) - z_model) * std::sqrt(1.0 + rx * rx + ry * ry);
+        if (along < -config.eps_res) {
+          ++r.occluded;
+        } else if (along <= config.eps_res) {
+          ++r.inliers;
+        } else if (along > config.eps_out) {
+          ++r.outliers;
+        } else {
+          ++r.uncertain;
+        }
+      }
+    }
+  }
+  const int observed_points = r.rendered - r.missing;
+  if (observed_points < std::max(1, config.min_points)) {
+    r.score = config.undetermined_score;
+    return r;
+  }
+  r.determined = true;
+  // Occlusion over every observed point; inliers and outliers over the part not hidden, so that
+  // occlusion is counted once (by S_occ) and not a second time as missing inliers.
+  r.r_occ = static_cast<double>(r.occluded) / observed_points;
+  const int visible = observed_points - r.occluded;
+  r.r_in = visible > 0 ? static_cast<double>(r.inliers) / visible : 0.0;
+  r.r_out = visible > 0 ? static_cast<double>(r.outliers) / visible : 0.0;
+  r.score = config.inlier(r.r_in) * config.outlier(1.0 - r.r_out) * config.occlusion(1.0 - r.r_occ);
+  return r;
+}
+
+ConsistencyScorer::ConsistencyScorer(std::shared_ptr<OffscreenRenderer> renderer,
+                                     ConsistencyConfig config)
+    : renderer_(std::move(renderer)), config_(config) {}
+
+MeshHandle ConsistencyScorer::handleFor(const std::shared_ptr<const ObjectModel>& model) {
+  const auto it = handles_.find(model);
+  if (it != handles_.end()) return it->second;
+  const MeshHandle h = renderer_->addMesh(simplifyMesh(
+      model->mesh, static_cast<std::size_t>(std::max(1, config_.render_mesh_triangles)),
+      config_.render_mesh_max_error_m));
+  handles_.emplace(model, h);  // -1 is remembered too: a bad mesh is reported once
+  return h;
+}
+
+ConsistencyResult ConsistencyScorer::score(const std::shared_ptr<const ObjectModel>& model,
+                                           const Eigen::Isometry3d& T_cam_model,
+                                           const DepthImageView& observed,
+                                           const PinholeIntrinsics& K) {
+  ConsistencyResult undetermined;
+  undetermined.score = config_.undetermined_score;
+  if (!model || !renderer_ || !renderer_->ok() || !T_cam_model.matrix().allFinite())
+    return undetermined;
+  const MeshHandle mesh = handleFor(model);
+  if (mesh < 0) return undetermined;
+  const PixelBox region = renderer_->projectedRegion(K, mesh, T_cam_model);
+  if (!region.valid()) return undetermined;
+  RenderItem item;
+  item.mesh = mesh;
+  item.T_cam_model = T_cam_model;
+  if (!renderer_->render(K, {item}, &scratch_, region, OffscreenRenderer::kDepth))
+    return undetermined;
+  return compareDepth(scratch_, observed, K, config_);
+}
+
+}  // namespace geofusion

@@ -1,0 +1,307 @@
+#include "geofusion/simulation/clutter_scene.h"
+
+#include "geofusion/model/fcl_hull.h"
+
+#include <btBulletDynamicsCommon.h>
+#include <fcl/geometry/shape/box.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <random>
+#include <sstream>
+
+namespace geofusion {
+
+ObjectModel TableSpec::model() const {
+  ObjectModel m;
+  m.name = "table";
+  m.id = 0;
+  m.mesh = makeBox(Eigen::Vector3d(size_x_m, size_y_m, thickness_m));
+  m.extents = m.mesh.extents();
+  m.features = extractSurfaceFeatures(m.mesh);
+  return m;
+}
+
+Eigen::Isometry3d TableSpec::pose() const {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(0.0, 0.0, height_m - 0.5 * thickness_m);
+  return T;
+}
+
+namespace {
+
+struct FclScene {
+  std::vector<std::shared_ptr<fcl::CollisionGeometryd>> geometry;  // [0] = table
+  std::vector<fcl::CollisionObjectd> objects;
+  explicit FclScene(const ClutterScene& s) {
+    geometry.push_back(
+        std::make_shared<fcl::Boxd>(s.table.size_x_m, s.table.size_y_m, s.table.thickness_m));
+    objects.emplace_back(geometry.back(), fcl::Transform3d(s.table.pose().matrix()));
+    for (const auto& o : s.objects) {
+      geometry.push_back(fclHull(*o.model));
+      objects.emplace_back(geometry.back(), fcl::Transform3d(o.T_world_obj.matrix()));
+    }
+    for (auto& o : objects) o.computeAABB();
+  }
+  fcl::CollisionObjectd* at(int i) { return &objects[static_cast<std::size_t>(i + 1)]; }
+};
+
+// Bullet world with the table and the bodies of the objects placed so far.
+class Physics {
+ public:
+  explicit Physics(const TableSpec& table)
+      : dispatcher_(&config_), world_(&dispatcher_, &broadphase_, &solver_, &config_) {
+    world_.setGravity(btVector3(0, 0, -9.81));
+    table_shape_ = std::make_unique<btBoxShape>(
+        btVector3(0.5 * table.size_x_m, 0.5 * table.size_y_m, 0.5 * table.thickness_m));
+    btTransform t;
+    t.setIdentity();
+    t.setOrigin(btVector3(0, 0, table.height_m - 0.5 * table.thickness_m));
+    table_state_ = std::make_unique<btDefaultMotionState>(t);
+    btRigidBody::btRigidBodyConstructionInfo info(0.0, table_state_.get(), table_shape_.get());
+    info.m_friction = 0.8;
+    table_body_ = std::make_unique<btRigidBody>(info);
+    world_.addRigidBody(table_body_.get());
+  }
+  ~Physics() {
+    for (auto& b : bodies_) world_.removeRigidBody(b.body.get());
+    world_.removeRigidBody(table_body_.get());
+  }
+
+  int add(const ObjectModel& model, const Eigen::Isometry3d& T_world_obj) {
+    Body b;
+    const TriangleMesh hull = collisionHullOf(model);
+    Eigen::Vector3f c = Eigen::Vector3f::Zero();
+    for (const auto& v : hull.vertices) c += v;
+    c /= static_cast<float>(hull.vertices.size());
+    b.offset = c.cast<double>();  // body frame = model frame shifted to the hull centroid
+    b.shape = std::make_unique<btConvexHullShape>();
+    for (const auto& v : hull.vertices) {
+      const Eigen::Vector3f p = v - c;
+      b.shape->addPoint(btVector3(p.x(), p.y(), p.z()), false);
+    }
+    b.shape->recalcLocalAabb();
+    b.shape->setMargin(0.0005f);
+    const btScalar mass = 0.3f;
+    btVector3 inertia;
+    b.shape->calculateLocalInertia(mass, inertia);
+    b.state = std::make_unique<btDefaultMotionState>(
+        toBullet(T_world_obj * Eigen::Translation3d(b.offset)));
+    btRigidBody::btRigidBodyConstructionInfo info(mass, b.state.get(), b.shape.get(), inertia);
+    info.m_friction = 0.7;
+    info.m_rollingFriction = 0.002;
+    info.m_spinningFriction = 0.002;
+    info.m_restitution = 0.0;
+    info.m_linearDamping = 0.2;
+    info.m_angularDamping = 0.4;
+    b.body = std::make_unique<btRigidBody>(info);
+    b.body->setActivationState(DISABLE_DEACTIVATION);
+    world_.addRigidBody(b.body.get());
+    bodies_.push_back(std::move(b));
+    return static_cast<int>(bodies_.size()) - 1;
+  }
+
+  void remove(int i) {
+    world_.removeRigidBody(bodies_[i].body.get());
+    bodies_.erase(bodies_.begin() + i);
+  }
+
+  /// Steps until everything rests (or max_s of simulated time).
+  void settle(double max_s) {
+    const double dt = 1.0 / 240.0;
+    int quiet = 0;
+    for (double t = 0.0; t < max_s; t += dt) {
+      world_.stepSimulation(static_cast<btScalar>(dt), 1, static_cast<btScalar>(dt));
+      bool moving = false;
+      for (const auto& b : bodies_) {
+        if (b.body->getLinearVelocity().length() > 0.002 ||
+            b.body->getAngularVelocity().length() > 0.02) {
+          moving = true;
+          break;
+        }
+      }
+      quiet = moving ? 0 : quiet + 1;
+      if (quiet > 24) break;  // 0.1 s at rest
+    }
+  }
+
+  Eigen::Isometry3d pose(int i) const {
+    btTransform t;
+    bodies_[i].state->getWorldTransform(t);
+    return fromBullet(t) * Eigen::Translation3d(-bodies_[i].offset);
+  }
+  std::size_t size() const { return bodies_.size(); }
+
+ private:
+  struct Body {
+    std::unique_ptr<btConvexHullShape> shape;
+    std::unique_ptr<btDefaultMotionState> state;
+    std::unique_ptr<btRigidBody> body;
+    Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+  };
+  static btTransform toBullet(const Eigen::Isometry3d& T) {
+    const Eigen::Quaterniond q(T.linear());
+    return btTransform(btQuaternion(q.x(), q.y(), q.z(), q.w()),
+                       btVector3(T.translation().x(), T.translation().y(), T.translation().z()));
+  }
+  static Eigen::Isometry3d fromBullet(const btTransform& t) {
+    const btQuaternion q = t.getRotation();
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z()).normalized().toRotationMatrix();
+    T.translation() = Eigen::Vector3d(t.getOrigin().x(), t.getOrigin().y(), t.getOrigin().z());
+    return T;
+  }
+
+  btDefaultCollisionConfiguration config_;
+  btCollisionDispatcher dispatcher_;
+  btDbvtBroadphase broadphase_;
+  btSequentialImpulseConstraintSolver solver_;
+  btDiscreteDynamicsWorld world_;
+  std::unique_ptr<btBoxShape> table_shape_;
+  std::unique_ptr<btDefaultMotionState> table_state_;
+  std::unique_ptr<btRigidBody> table_body_;
+  std::vector<Body> bodies_;
+};
+
+}  // namespace
+
+double maxPenetration(const ClutterScene& scene, std::pair<int, int>* pair) {
+  FclScene fcl_scene(scene);
+  const int n = static_cast<int>(scene.objects.size());
+  double worst = 0.0;
+  for (int i = -1; i < n; ++i) {
+    for (int j = i + 1; j < n; ++j) {
+      if (!fcl_scene.at(i)->getAABB().overlap(fcl_scene.at(j)->getAABB())) continue;
+      const double d = fclPenetration(fcl_scene.at(i), fcl_scene.at(j));
+      if (d > worst) {
+        worst = d;
+        if (pair) *pair = {i, j};
+      }
+    }
+  }
+  return worst;
+}
+
+double hullDistance(const ClutterScene& scene, int a, int b) {
+  FclScene fcl_scene(scene);
+  return fclDistance(fcl_scene.at(a), fcl_scene.at(b));
+}
+
+std::vector<FeatureContact> groundTruthContacts(const ClutterScene& scene,
+                                                const ClutterConfig& config) {
+  const ObjectModel table = scene.table.model();
+  std::vector<PosedModel> posed;
+  posed.push_back({&table, scene.table.pose()});
+  for (const auto& o : scene.objects) posed.push_back({o.model.get(), o.T_world_obj});
+  FclScene fcl_scene(scene);
+  ContactConfig contact_config;
+  contact_config.support_only = false;
+  std::vector<FeatureContact> out;
+  const int n = static_cast<int>(scene.objects.size());
+  for (int i = -1; i < n; ++i) {
+    for (int j = i + 1; j < n; ++j) {
+      fcl::AABBd box = fcl_scene.at(i)->getAABB();
+      box.expand(fcl::Vector3d::Constant(config.touch_distance_m));
+      if (!box.overlap(fcl_scene.at(j)->getAABB())) continue;
+      if (fclDistance(fcl_scene.at(i), fcl_scene.at(j)) > config.touch_distance_m) continue;
+      for (FeatureContact c :
+           findContacts(posed, i + 1, j + 1, -Eigen::Vector3d::UnitZ(), contact_config)) {
+        c.object_a -= 1;  // back to scene indices, table = -1
+        c.object_b -= 1;
+        out.push_back(c);
+      }
+    }
+  }
+  return out;
+}
+
+bool makeClutterScene(const ModelSet& models, const ClutterConfig& config, unsigned seed,
+                      ClutterScene* scene, std::string* report) {
+  std::ostringstream log;
+  std::vector<std::shared_ptr<const ObjectModel>> pool;
+  for (const auto& m : models.models()) {
+    if (config.classes.empty() ||
+        std::find(config.classes.begin(), config.classes.end(), m->name) != config.classes.end())
+      pool.push_back(m);
+  }
+  if (pool.empty()) {
+    if (report) *report = "no models to place (empty model set or no class matches)";
+    return false;
+  }
+  *scene = ClutterScene();
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  Physics physics(scene->table);
+  std::vector<std::shared_ptr<const ObjectModel>> placed;
+  const double top = scene->table.height_m;
+  int attempts = 0;
+  while (static_cast<int>(placed.size()) < config.num_objects &&
+         attempts < 4 * config.num_objects) {
+    ++attempts;
+    const auto& model = pool[static_cast<std::size_t>(uni(rng) * pool.size()) % pool.size()];
+    Eigen::Vector3f lo, hi;
+    model->mesh.bounds(&lo, &hi);
+    const double radius = 0.5 * static_cast<double>((hi - lo).norm());
+    // Orientation: upright or lying on a side, random yaw, a little tilt.
+    Eigen::Matrix3d R =
+        Eigen::AngleAxisd(2 * M_PI * uni(rng), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    if (uni(rng) < config.lying_fraction) {
+      R = R * Eigen::AngleAxisd(
+                  M_PI / 2, uni(rng) < 0.5 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY());
+    }
+    R = Eigen::AngleAxisd(0.1 * (uni(rng) - 0.5), Eigen::Vector3d::UnitX()) * R;
+    Eigen::Vector2d xy(config.area_x_m * (uni(rng) - 0.5), config.area_y_m * (uni(rng) - 0.5));
+    double floor_z = top;
+    if (!placed.empty() && uni(rng) < config.stack_fraction) {  // onto an existing object
+      const int k = static_cast<int>(uni(rng) * physics.size()) % static_cast<int>(physics.size());
+      xy = physics.pose(k).translation().head<2>() +
+           Eigen::Vector2d(0.02 * (uni(rng) - 0.5), 0.02 * (uni(rng) - 0.5));
+    }
+    // Start above everything already within reach of (x, y).
+    for (std::size_t k = 0; k < physics.size(); ++k) {
+      const Eigen::Vector3d p = physics.pose(static_cast<int>(k)).translation();
+      Eigen::Vector3f plo, phi;
+      placed[k]->mesh.bounds(&plo, &phi);
+      const double r = 0.5 * static_cast<double>((phi - plo).norm());
+      if ((p.head<2>() - xy).norm() < r + radius) floor_z = std::max(floor_z, p.z() + r);
+    }
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = R;
+    const Eigen::Vector3d centre = (0.5f * (lo + hi)).cast<double>();
+    T.translation() = Eigen::Vector3d(xy.x(), xy.y(), floor_z + radius + 0.005) - R * centre;
+    physics.add(*model, T);
+    placed.push_back(model);
+    physics.settle(4.0);
+    // Anything that left the table top is taken out (and another object is tried).
+    for (int k = static_cast<int>(physics.size()) - 1; k >= 0; --k) {
+      const Eigen::Vector3d p = physics.pose(k).translation();
+      if (p.z() < top - 0.02 || std::abs(p.x()) > 0.5 * scene->table.size_x_m ||
+          std::abs(p.y()) > 0.5 * scene->table.size_y_m) {
+        physics.remove(k);
+        placed.erase(placed.begin() + k);
+        ++scene->dropped_off_table;
+      }
+    }
+  }
+  physics.settle(3.0);
+  for (std::size_t k = 0; k < physics.size(); ++k)
+    scene->objects.push_back({placed[k], physics.pose(static_cast<int>(k))});
+  std::pair<int, int> worst_pair{-2, -2};
+  scene->max_penetration_m = maxPenetration(*scene, &worst_pair);
+  scene->contacts = groundTruthContacts(*scene, config);
+  log << scene->objects.size() << " objects settled (" << scene->dropped_off_table
+      << " re-dropped), " << scene->contacts.size() << " contacts, deepest interpenetration "
+      << scene->max_penetration_m * 1000.0 << " mm";
+  if (scene->max_penetration_m > 0.0)
+    log << " (pair " << worst_pair.first << ", " << worst_pair.second << ")";
+  if (report) *report = log.str();
+  if (static_cast<int>(scene->objects.size()) < config.num_objects) {
+    if (report) *report += "; fewer objects than asked";
+    return false;
+  }
+  return scene->max_penetration_m <= config.max_penetration_m;
+}
+
+}  // namespace geofusion

@@ -1,0 +1,115 @@
+// The background OctoMap: depth minus the map's objects, ray cast from the camera.
+#include "geofusion/background/background_map.h"
+#include "geofusion/render/renderer.h"
+#include "test_geometry.h"
+
+#include <gtest/gtest.h>
+#include <octomap/OcTree.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace geofusion {
+namespace {
+
+using namespace test;  // NOLINT: the shared test helpers
+
+struct TableWithBox {
+  std::shared_ptr<OffscreenRenderer> renderer = std::make_shared<OffscreenRenderer>();
+  std::shared_ptr<ObjectModel> box = std::make_shared<ObjectModel>(boxModel(0.1, 0.1, 0.2));
+  Eigen::Isometry3d T_box = at(0.0, 0.0, 0.85);
+  PinholeIntrinsics K;
+  std::vector<Eigen::Isometry3d> cameras;
+  std::vector<RenderedImages> frames;
+  TableWithBox() {
+    const MeshHandle table = renderer->addMesh(makeBox(Eigen::Vector3d(1.2, 0.8, 0.04)));
+    const MeshHandle b = renderer->addMesh(box->mesh);
+    for (double a : {-0.4, 0.0, 0.4}) {
+      const Eigen::Isometry3d T_map_cam =
+          lookAt(Eigen::Vector3d(-0.9 * std::cos(a), 0.9 * std::sin(a), 1.35),
+                 Eigen::Vector3d(0, 0, 0.75));
+      const Eigen::Isometry3d T_cam_map = T_map_cam.inverse();
+      RenderedImages out;
+      renderer->render(K, {{table, T_cam_map * at(0, 0, 0.73), 1}, {b, T_cam_map * T_box, 2}}, &out,
+                       PixelBox{}, OffscreenRenderer::kDepth);
+      cameras.push_back(T_map_cam);
+      frames.push_back(out);
+    }
+  }
+};
+
+TEST(BackgroundMap, TableInObjectsOut) {
+  TableWithBox scene;
+  ASSERT_TRUE(scene.renderer->ok());
+  BackgroundMap masked(BackgroundMapConfig(), scene.renderer);
+  BackgroundMap unmasked(BackgroundMapConfig(), scene.renderer);
+  for (std::size_t k = 0; k < scene.frames.size(); ++k) {
+    const DepthImageView depth{scene.frames[k].depth.data(), scene.K.width, scene.K.height};
+    EXPECT_GT(masked.insert(depth, scene.K, scene.cameras[k], {{scene.box, scene.T_box}}), 1000);
+    unmasked.insert(depth, scene.K, scene.cameras[k], {});
+  }
+  // The table top beside the box is occupied, in both.
+  int table_hits = 0;
+  for (double x : {-0.3, -0.2, 0.2}) {
+    for (double y : {-0.2, 0.2}) {
+      table_hits += masked.isOccupied(Eigen::Vector3d(x, y, 0.745));
+    }
+  }
+  EXPECT_GE(table_hits, 4);
+  // The box's visible faces are in the unmasked map only.
+  int box_masked = 0, box_unmasked = 0;
+  for (const Eigen::Vector3d& p : unmasked.occupiedCentres()) {
+    const Eigen::Vector3d q = scene.T_box.inverse() * p;
+    box_unmasked +=
+        std::abs(q.x()) < 0.06 && std::abs(q.y()) < 0.06 && q.z() > -0.09 && q.z() < 0.11;
+  }
+  for (const Eigen::Vector3d& p : masked.occupiedCentres()) {
+    const Eigen::Vector3d q = scene.T_box.inverse() * p;
+    box_masked += std::abs(q.x()) < 0.06 && std::abs(q.y()) < 0.06 && q.z() > -0.09 && q.z() < 0.11;
+  }
+  EXPECT_GT(box_unmasked, 20);
+  EXPECT_EQ(box_masked, 0);
+  // An object that joins the map later is carved out of what was inserted before it.
+  const DepthImageView last{scene.frames[0].depth.data(), scene.K.width, scene.K.height};
+  unmasked.insert(last, scene.K, scene.cameras[0], {{scene.box, scene.T_box}});
+  int box_after = 0;
+  for (const Eigen::Vector3d& p : unmasked.occupiedCentres()) {
+    const Eigen::Vector3d q = scene.T_box.inverse() * p;
+    box_after += std::abs(q.x()) < 0.06 && std::abs(q.y()) < 0.06 && q.z() > -0.09 && q.z() < 0.11;
+  }
+  EXPECT_EQ(box_after, 0);
+  // The .bt file is written whole.
+  const std::string path = ::testing::TempDir() + "/geofusion_background.bt";
+  std::string error;
+  ASSERT_TRUE(masked.writeBinary(path, &error)) << error;
+  std::ifstream in(path);
+  std::string first;
+  std::getline(in, first);
+  EXPECT_NE(first.find("Octomap"), std::string::npos) << first;
+  std::remove(path.c_str());
+  // The message payload (octomap_msgs/Octomap data) reads back into the same occupied voxels.
+  const std::string data = masked.binaryData();
+  ASSERT_FALSE(data.empty());
+  std::istringstream payload(data, std::ios::binary);
+  octomap::OcTree back(masked.config().resolution_m);
+  ASSERT_TRUE(back.readBinaryData(payload));
+  std::size_t leaves = 0;
+  for (auto it = back.begin_leafs(); it != back.end_leafs(); ++it) {
+    if (!back.isNodeOccupied(*it)) continue;
+    ++leaves;
+    EXPECT_TRUE(masked.isOccupied(Eigen::Vector3d(it.getX(), it.getY(), it.getZ())));
+  }
+  EXPECT_GT(leaves, 0u);
+  for (const Eigen::Vector3d& p : masked.occupiedCentres()) {
+    const octomap::OcTreeNode* node = back.search(p.x(), p.y(), p.z());
+    ASSERT_NE(node, nullptr);
+    EXPECT_TRUE(back.isNodeOccupied(node));
+  }
+  // Bad input inserts nothing.
+  EXPECT_EQ(masked.insert(DepthImageView{}, scene.K, scene.cameras[0], {}), 0);
+}
+
+}  // namespace
+}  // namespace geofusion

@@ -1,0 +1,289 @@
+// The scene estimator end to end on a generated clutter sequence (built-in primitives): the four
+// methods from one code path, object count, false-positive removal and pose error.
+#include "geofusion/estimation/keyframe_selector.h"
+#include "geofusion/estimation/scene_estimator.h"
+#include "geofusion/evaluation/evaluation.h"
+#include "geofusion/evaluation/metrics.h"
+#include "geofusion/evaluation/sequence_calibration.h"
+#include "geofusion/render/renderer.h"
+#include "geofusion/simulation/dataset.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <functional>
+#include <iostream>
+#include <limits>
+#include <memory>
+
+namespace geofusion {
+namespace {
+
+struct Sequence {
+  ModelSet models;
+  ClutterScene scene;
+  std::vector<FramePose> poses;
+  std::vector<SequenceFrame> frames;
+};
+
+// 40 keyframes at 5 Hz of a clutter scene, DenseFusion-like detections with `false_positives`
+// a keyframe, drifting odometry.
+Sequence* makeSequence(int objects, double false_positives) {
+  auto* s = new Sequence();
+  s->models = ModelSet::builtinPrimitives();
+  SuiteSpec suite;
+  suiteByName("demo", &suite);
+  SceneSpec spec = suite.scenes[0];
+  spec.num_objects = objects;
+  std::string report;
+  unsigned used = 0;
+  if (!makeSuiteScene(suite, spec, s->models, &s->scene, &used, &report)) {
+    ADD_FAILURE() << report;
+    return s;
+  }
+  TrajectoryConfig traj;
+  traj.frames = 40;
+  s->poses = makeTrajectory(s->scene, traj, 3);
+  addOdometryDrift(&s->poses, OdometryNoise(), 4);
+  SequenceRenderer renderer(s->scene, PinholeIntrinsics());
+  std::mt19937 rng(5);
+  DetectorModel detector = DetectorModel::denseFusion();
+  detector.false_positives_per_frame = false_positives;
+  for (const FramePose& p : s->poses) {
+    s->frames.push_back(renderer.render(p, DepthNoise(), detector, s->models, rng));
+  }
+  return s;
+}
+
+// The demo scene (10 objects), 1 false positive a keyframe.
+const Sequence& demoSequence() {
+  static Sequence* seq = makeSequence(10, 1.0);
+  return *seq;
+}
+
+Keyframe keyframeOf(const Sequence& s, std::size_t k) {
+  return makeKeyframe(s.poses[k], s.frames[k], PinholeIntrinsics());
+}
+
+using Score = MapScore;
+
+int objectsSeenOften(const Sequence& s, int min_frames) {
+  return objectsDetectedInFrames(s.scene, s.frames, min_frames);
+}
+
+Score run(Method method, std::vector<KeyframeResult>* results = nullptr,
+          const std::function<void(EstimatorConfig*)>& configure = nullptr,
+          const std::function<void(Keyframe*)>& modify = nullptr,
+          const Sequence& s = demoSequence()) {
+  EstimatorConfig config;
+  config.method = method;
+  if (configure) configure(&config);
+  SceneEstimator estimator(s.models, config);
+  for (std::size_t k = 0; k < s.frames.size(); ++k) {
+    Keyframe kf = keyframeOf(s, k);
+    if (modify) modify(&kf);
+    KeyframeResult r = estimator.addKeyframe(kf);
+    if (results) results->push_back(r);
+  }
+  const KeyframeResult final = estimator.finish();
+  return scoreMap(s.scene, final.objects);
+}
+
+TEST(KeyframeSelector, EveryNthFrameOrByMotion) {
+  auto moved = [](double x, double yaw) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation().x() = x;
+    T.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    return T;
+  };
+  KeyframeSelectorConfig every3;
+  every3.every_n_frames = 3;
+  KeyframeSelector s(every3);
+  std::vector<int> picked;
+  for (int k = 0; k < 10; ++k)
+    if (s.select(moved(0.0, 0.0))) picked.push_back(k);
+  EXPECT_EQ(picked, (std::vector<int>{0, 3, 6, 9}));
+  // By motion only: 5 cm or 0.1 rad since the last keyframe.
+  KeyframeSelectorConfig motion;
+  motion.min_translation_m = 0.05;
+  motion.min_rotation_rad = 0.1;
+  KeyframeSelector m(motion);
+  EXPECT_TRUE(m.select(moved(0.0, 0.0)));    // the first frame
+  EXPECT_FALSE(m.select(moved(0.0, 0.0)));   // standing still: never
+  EXPECT_FALSE(m.select(moved(0.03, 0.0)));  // 3 cm
+  EXPECT_TRUE(m.select(moved(0.06, 0.0)));   // 6 cm since the last keyframe
+  EXPECT_FALSE(m.select(moved(0.08, 0.05)));
+  EXPECT_TRUE(m.select(moved(0.08, 0.12)));  // turned 0.12 rad
+  m.reset();
+  EXPECT_TRUE(m.select(moved(0.08, 0.12)));  // after a reset the next frame is the first
+}
+
+TEST(SceneEstimator, MethodNames) {
+  Method m;
+  for (Method x : {Method::kFrameByFrame, Method::kBaselineSlam, Method::kRobustFrontEnd,
+                   Method::kGeoFusion}) {
+    ASSERT_TRUE(parseMethod(toString(x), &m));
+    EXPECT_EQ(m, x);
+  }
+  EXPECT_TRUE(parseMethod("geofusion", &m));
+  EXPECT_FALSE(parseMethod("orbslam", &m));
+}
+
+TEST(SceneEstimator, MethodsAreCompositionsOfTheSameStages) {
+  const MethodStages fbf = stagesOf(Method::kFrameByFrame), bslam = stagesOf(Method::kBaselineSlam),
+                     rfront = stagesOf(Method::kRobustFrontEnd),
+                     geo = stagesOf(Method::kGeoFusion);
+  EXPECT_TRUE(fbf.map_is_keyframe_detections);
+  EXPECT_FALSE(fbf.stage_one || fbf.geometric_consistency || fbf.relations_and_stage_two);
+  EXPECT_TRUE(bslam.stage_one && !bslam.geometric_consistency && !bslam.false_positive_removal);
+  EXPECT_TRUE(rfront.geometric_consistency && rfront.false_positive_removal && !rfront.stage_one);
+  EXPECT_TRUE(geo.geometric_consistency && geo.false_positive_removal && geo.stage_one &&
+              geo.relations_and_stage_two && !geo.map_is_keyframe_detections);
+}
+
+// Every keyframe says which optimisation stages ran and how they ended: stage I every
+// `every_n_keyframes` for the methods with it, stage II at every keyframe for GeoFusion only.
+TEST(SceneEstimator, KeyframesReportTheOutcomeOfEachStage) {
+  for (Method method : {Method::kBaselineSlam, Method::kRobustFrontEnd, Method::kGeoFusion}) {
+    std::vector<KeyframeResult> results;
+    run(method, &results);
+    ASSERT_EQ(results.size(), 40u);
+    const bool stage_one = stagesOf(method).stage_one;
+    const bool stage_two = stagesOf(method).relations_and_stage_two;
+    for (const KeyframeResult& r : results) {
+      const bool due = (r.keyframe + 1) % StageOneConfig().every_n_keyframes == 0;
+      EXPECT_EQ(r.stage_one.ran(), stage_one && due) << toString(method) << " kf " << r.keyframe;
+      EXPECT_EQ(r.stage_two.ran(), stage_two) << toString(method) << " kf " << r.keyframe;
+      EXPECT_FALSE(r.stage_one.failed()) << toString(r.stage_one.status);
+      EXPECT_FALSE(r.stage_two.failed()) << toString(r.stage_two.status);
+      if (r.stage_one.ran()) EXPECT_LE(r.stage_one.final_cost, r.stage_one.initial_cost);
+    }
+  }
+}
+
+TEST(SceneEstimator, GeoFusionFindsTheObjectsAndDropsFalsePositives) {
+  const Sequence& s = demoSequence();
+  ASSERT_EQ(s.frames.size(), 40u);
+  int fp_detections = 0;
+  for (const auto& f : s.frames)
+    for (int t : f.detection_truth) fp_detections += t < 0;
+  ASSERT_GT(fp_detections, 20);
+  std::vector<KeyframeResult> results;
+  const Score geo = run(Method::kGeoFusion, &results);
+  const int expected = objectsSeenOften(s, 5);
+  std::printf(
+      "GeoFusion: %d objects (%d true, %d false; %d true objects seen in >= 5 frames), "
+      "mean ADD-S %.2f mm\n",
+      geo.objects, geo.true_positives, geo.false_positives, expected, 1000 * geo.mean_adds_m);
+  EXPECT_GE(geo.true_positives, expected - 1);
+  EXPECT_LE(geo.false_positives, 1);
+  double worst = 0;
+  for (const auto& r : results) worst = std::max(worst, r.timings.total_ms);
+  std::printf("worst keyframe %.1f ms\n", worst);
+}
+
+TEST(SceneEstimator, GeoFusionIsMoreAccurateThanFrameByFrame) {
+  const Sequence& s = demoSequence();
+  // FbF: every keyframe's true-class detections against the truth.
+  SequenceCalibration fbf_calibration;
+  for (std::size_t k = 0; k < s.frames.size(); ++k)
+    fbf_calibration.add(s.scene, s.poses[k].T_map_optical, s.frames[k]);
+  const std::vector<double> fbf = fbf_calibration.errors();
+  ASSERT_FALSE(fbf.empty());
+  double fbf_mean = 0;
+  for (double e : fbf) fbf_mean += e / fbf.size();
+  const Score geo = run(Method::kGeoFusion);
+  const Score rfront = run(Method::kRobustFrontEnd);
+  const Score bslam = run(Method::kBaselineSlam);
+  std::printf(
+      "mean ADD-S: FbF %.2f mm, B-SLAM %.2f mm (%d/%d), R-Front %.2f mm (%d/%d), "
+      "GeoFusion %.2f mm (%d/%d)\n",
+      1000 * fbf_mean, 1000 * bslam.mean_adds_m, bslam.true_positives, bslam.objects,
+      1000 * rfront.mean_adds_m, rfront.true_positives, rfront.objects, 1000 * geo.mean_adds_m,
+      geo.true_positives, geo.objects);
+  EXPECT_LT(geo.mean_adds_m, fbf_mean);
+}
+
+TEST(SceneEstimator, FiveObjectsWithTwentyPercentFalsePositives) {
+  std::unique_ptr<Sequence> s(makeSequence(5, 1.2));
+  int detections = 0, false_detections = 0;
+  for (const auto& f : s->frames) {
+    for (int t : f.detection_truth) ++detections, false_detections += t < 0;
+  }
+  const double fp_share = static_cast<double>(false_detections) / detections;
+  const Score geo = run(Method::kGeoFusion, nullptr, nullptr, nullptr, *s);
+  const Score bslam = run(Method::kBaselineSlam, nullptr, nullptr, nullptr, *s);
+  std::printf("%d detections, %.0f %% false: GeoFusion %d objects (%d true), B-SLAM %d (%d true)\n",
+              detections, 100 * fp_share, geo.objects, geo.true_positives, bslam.objects,
+              bslam.true_positives);
+  EXPECT_GT(fp_share, 0.15);
+  EXPECT_EQ(geo.true_positives, objectsSeenOften(*s, 5));
+  EXPECT_EQ(geo.false_positives, 0);
+  EXPECT_GT(bslam.false_positives, 0);  // without removal the false ones stay
+}
+
+TEST(SceneEstimator, JointAssignmentIsAtLeastAsGoodAsTheGreedyOrder) {
+  const Score joint = run(Method::kGeoFusion);
+  const Score greedy = run(Method::kGeoFusion, nullptr,
+                           [](EstimatorConfig* c) { c->association.joint_assignment = false; });
+  std::printf("joint: %d true / %d objects, %.2f mm; greedy: %d / %d, %.2f mm\n",
+              joint.true_positives, joint.objects, 1000 * joint.mean_adds_m, greedy.true_positives,
+              greedy.objects, 1000 * greedy.mean_adds_m);
+  EXPECT_GE(joint.true_positives, greedy.true_positives);
+  EXPECT_LE(joint.false_positives, greedy.false_positives);
+  EXPECT_LE(joint.mean_adds_m, greedy.mean_adds_m + 0.0005);
+}
+
+TEST(SceneEstimator, DuplicateOfASymmetricObjectIsMerged) {
+  const Sequence& s = demoSequence();
+  // Every keyframe also reports a second copy of its first symmetric detection, 1 cm away:
+  // one measurement per object sends it to a new object, which the overlap check merges.
+  int duplicated = 0;
+  auto duplicate = [&](Keyframe* kf) {
+    for (const ObjectMeasurement& m : kf->detections) {
+      const ObjectModel* model = s.models.find(m.class_name);
+      if (!model || model->symmetry.type != Symmetry::Type::kContinuous) continue;
+      ObjectMeasurement copy = m;
+      copy.T_cam_obj.translation() += Eigen::Vector3d(0.01, 0.0, 0.0);
+      kf->detections.push_back(copy);
+      ++duplicated;
+      break;
+    }
+  };
+  std::vector<KeyframeResult> results;
+  const Score plain = run(Method::kGeoFusion);
+  const Score with_duplicates = run(Method::kGeoFusion, &results, nullptr, duplicate);
+  ASSERT_GT(duplicated, 20);
+  int merged = 0;
+  for (const auto& r : results) merged += static_cast<int>(r.removed_ids.size());
+  std::printf("%d duplicates: %d objects (without: %d), %d removals\n", duplicated,
+              with_duplicates.objects, plain.objects, merged);
+  EXPECT_EQ(with_duplicates.objects, plain.objects);
+  EXPECT_EQ(with_duplicates.false_positives, 0);
+  EXPECT_GT(merged, 0);
+}
+
+TEST(SceneEstimator, BadInputIsSkippedNotFatal) {
+  const Sequence& s = demoSequence();
+  EstimatorConfig config;
+  SceneEstimator estimator(s.models, config);
+  Keyframe kf = keyframeOf(s, 0);
+  ObjectMeasurement unknown = kf.detections.front();
+  unknown.class_name = "999_unknown";
+  kf.detections.push_back(unknown);
+  ObjectMeasurement nan = kf.detections.front();
+  nan.T_cam_obj.translation().x() = std::numeric_limits<double>::quiet_NaN();
+  kf.detections.push_back(nan);
+  const KeyframeResult r = estimator.addKeyframe(kf);
+  EXPECT_EQ(r.skipped_detections, 2);
+  for (const auto& o : r.objects) EXPECT_TRUE(o.T_map_obj.matrix().allFinite());
+  // A keyframe without depth: nothing is scored against the observation, nothing crashes.
+  Keyframe blind = keyframeOf(s, 1);
+  blind.depth = DepthImageView{};
+  const KeyframeResult r2 = estimator.addKeyframe(blind);
+  EXPECT_EQ(r2.keyframe, 1);
+  for (const auto& o : r2.objects) EXPECT_TRUE(o.T_map_obj.matrix().allFinite());
+}
+
+}  // namespace
+}  // namespace geofusion
