@@ -183,6 +183,41 @@ StageOneSummary optimizeStageOne(std::vector<Eigen::Isometry3d>* T_map_cam,
 
 // ---------------------------------------------------------------------------------------------
 // Stage II.
+namespace {
+
+// A feature's centre, normal (plane) or axis (curve), and radius (0 for a plane), in its model's
+// frame; false for an index the model does not have.
+bool featureGeometry(const ObjectModel& m, const FeatureRef& f, Eigen::Vector3d* centre,
+                     Eigen::Vector3d* dir, double* radius) {
+  if (f.plane) {
+    if (f.index < 0 || f.index >= static_cast<int>(m.features.planes.size())) return false;
+    const PlaneFeature& p = m.features.planes[static_cast<std::size_t>(f.index)];
+    *centre = p.center, *dir = p.normal, *radius = 0.0;
+  } else {
+    if (f.index < 0 || f.index >= static_cast<int>(m.features.curves.size())) return false;
+    const CurvedFeature& cv = m.features.curves[static_cast<std::size_t>(f.index)];
+    *centre = cv.center, *dir = cv.axis, *radius = cv.radius_m;
+  }
+  return true;
+}
+
+// The contact factor of a contact between models `ma` (object_a) and `mb` (object_b), weighted by
+// the configuration. A plane-curve contact takes the plane first: `swapped` says when the factor's
+// a is the contact's b.
+bool contactFactorOf(const FeatureContact& c, const ObjectModel& ma, const ObjectModel& mb,
+                     const StageTwoConfig& config, ContactFactor* e, bool* swapped) {
+  e->type = c.type;
+  e->w_p = 1.0 / config.contact_sigma_distance_m;
+  e->w_q = 1.0 / config.contact_sigma_direction;
+  *swapped = c.type == ContactType::kPlaneCurve && !c.feature_a.plane;
+  const FeatureRef& fa = *swapped ? c.feature_b : c.feature_a;
+  const FeatureRef& fb = *swapped ? c.feature_a : c.feature_b;
+  return featureGeometry(*swapped ? mb : ma, fa, &e->c_a, &e->n_a, &e->r_a) &&
+         featureGeometry(*swapped ? ma : mb, fb, &e->c_b, &e->n_b, &e->r_b);
+}
+
+}  // namespace
+
 StageTwoSummary optimizeStageTwo(std::vector<Eigen::Isometry3d>* T_world_obj,
                                  const std::vector<const ObjectModel*>& models,
                                  const std::vector<Eigen::Isometry3d>& priors,
@@ -232,29 +267,8 @@ StageTwoSummary optimizeStageTwo(std::vector<Eigen::Isometry3d>* T_world_obj,
     const ObjectModel *ma = model_of(c.object_a), *mb = model_of(c.object_b);
     if (!a || !b || !ma || !mb || a == b) continue;
     ContactFactor e;
-    e.type = c.type;
-    e.w_p = 1.0 / config.contact_sigma_distance_m;
-    e.w_q = 1.0 / config.contact_sigma_direction;
-    auto set_feature = [&](const ObjectModel& m, const FeatureRef& f, Eigen::Vector3d* centre,
-                           Eigen::Vector3d* dir, double* radius) {
-      if (f.plane) {
-        if (f.index < 0 || f.index >= static_cast<int>(m.features.planes.size())) return false;
-        const PlaneFeature& p = m.features.planes[static_cast<std::size_t>(f.index)];
-        *centre = p.center, *dir = p.normal, *radius = 0.0;
-      } else {
-        if (f.index < 0 || f.index >= static_cast<int>(m.features.curves.size())) return false;
-        const CurvedFeature& cv = m.features.curves[static_cast<std::size_t>(f.index)];
-        *centre = cv.center, *dir = cv.axis, *radius = cv.radius_m;
-      }
-      return true;
-    };
-    bool swap = c.type == ContactType::kPlaneCurve && !c.feature_a.plane;
-    const FeatureRef& fa = swap ? c.feature_b : c.feature_a;
-    const FeatureRef& fb = swap ? c.feature_a : c.feature_b;
-    if (!set_feature(swap ? *mb : *ma, fa, &e.c_a, &e.n_a, &e.r_a) ||
-        !set_feature(swap ? *ma : *mb, fb, &e.c_b, &e.n_b, &e.r_b)) {
-      continue;
-    }
+    bool swap = false;
+    if (!contactFactorOf(c, *ma, *mb, config, &e, &swap)) continue;
     if (swap) std::swap(a, b);
     add_object(swap ? c.object_b : c.object_a);
     add_object(swap ? c.object_a : c.object_b);

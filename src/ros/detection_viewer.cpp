@@ -12,7 +12,7 @@ namespace geofusion {
 
 DetectionViewer::DetectionViewer(ros::NodeHandle nh, ros::NodeHandle pnh)
     : nh_(nh), pnh_(pnh), tf_listener_(tf_buffer_) {
-  pnh_.param<std::string>("odom_frame", odom_frame_, "odom");
+  pnh_.param<std::string>("odom_frame", odom_frame_, kOdomFrame);
   warn_period_s_ = paramAtLeast(pnh_, "warn_period_s", 5.0, 0.1);
 
   FrameByFrame::Config fbf;
@@ -22,8 +22,7 @@ DetectionViewer::DetectionViewer(ros::NodeHandle nh, ros::NodeHandle pnh)
   axis_length_m_ = paramAtLeast(pnh_, "axis_length_m", 0.05, 0.005);
   tf_timeout_s_ = paramAtLeast(pnh_, "tf_timeout_s", 0.1, 0.0);
 
-  const RgbdDetectionSubscriber::Config sub =
-      RgbdDetectionSubscriber::configFromParams(pnh_, warn_period_s_);
+  const RgbdSubscriber::Config sub = RgbdSubscriber::configFromParams(pnh_, warn_period_s_);
 
   markers_pub_ = pnh_.advertise<visualization_msgs::MarkerArray>("detection_markers", 5);
 
@@ -38,7 +37,7 @@ DetectionViewer::DetectionViewer(ros::NodeHandle nh, ros::NodeHandle pnh)
   reconfigure_->setCallback(
       [this](geofusion::DetectionViewerConfig& c, uint32_t level) { onReconfigure(c, level); });
 
-  subscriber_ = std::make_unique<RgbdDetectionSubscriber>(
+  subscriber_ = std::make_unique<RgbdSubscriber>(
       nh_, sub,
       [this](const sensor_msgs::ImageConstPtr& rgb, const sensor_msgs::ImageConstPtr& depth,
              const sensor_msgs::CameraInfoConstPtr& info,

@@ -22,8 +22,8 @@ namespace geofusion {
 
 SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
     : nh_(nh), pnh_(pnh), tf_listener_(tf_buffer_), diagnostics_(nh, pnh) {
-  pnh_.param<std::string>("map_frame", map_frame_, "map");
-  pnh_.param<std::string>("odom_frame", odom_frame_, "odom");
+  pnh_.param<std::string>("map_frame", map_frame_, kMapFrame);
+  pnh_.param<std::string>("odom_frame", odom_frame_, kOdomFrame);
   pnh_.param("publish_map_to_odom", publish_tf_, true);
   pnh_.param<std::string>("save_on_shutdown", save_on_shutdown_, "");
   tf_timeout_s_ = paramAtLeast(pnh_, "tf_timeout_s", 0.1, 0.0);
@@ -121,9 +121,8 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
                                                 << odom_frame_ << " -> base");
   }
 
-  const RgbdDetectionSubscriber::Config sub =
-      RgbdDetectionSubscriber::configFromParams(pnh_, warn_period_s_);
-  subscriber_ = std::make_unique<RgbdDetectionSubscriber>(
+  const RgbdSubscriber::Config sub = RgbdSubscriber::configFromParams(pnh_, warn_period_s_);
+  subscriber_ = std::make_unique<RgbdSubscriber>(
       nh_, sub,
       [this](const auto& rgb, const auto& depth, const auto& info, const auto& dets) {
         onFrame(rgb, depth, info, dets);
@@ -367,9 +366,9 @@ void SceneEstimatorNode::onReconfigure(geofusion::SceneEstimatorConfig& config, 
 void SceneEstimatorNode::onOdometry(const nav_msgs::OdometryConstPtr& msg) {
   const geometry_msgs::Pose& p = msg->pose.pose;
   const Eigen::Quaterniond q(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z);
-  const bool finite = std::isfinite(p.position.x) && std::isfinite(p.position.y) &&
-                      std::isfinite(p.position.z) && q.coeffs().allFinite();
-  if (!finite || std::abs(q.norm() - 1.0) > 1e-2) {
+  // The same check and unit-quaternion tolerance as every pose that comes in (pose_validation.h).
+  if (checkPose(Eigen::Vector3d(p.position.x, p.position.y, p.position.z), q) !=
+      PoseStatus::kValid) {
     ROS_WARN_STREAM_THROTTLE(warn_period_s_, "geofusion: odometry on "
                                                  << odom_sub_.getTopic()
                                                  << " with a non-finite position or a "

@@ -5,7 +5,6 @@
 #include "geofusion/ros/tf_lookup.h"
 
 #include <tf2_eigen/tf2_eigen.h>
-#include <boost/bind/bind.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -31,8 +30,8 @@ void fill(const Matrix6d& m, boost::array<double, 36>* out) {
 
 VisualOdometryNode::VisualOdometryNode(ros::NodeHandle nh, ros::NodeHandle pnh)
     : nh_(nh), pnh_(pnh), tf_listener_(tf_buffer_), diagnostics_(nh, pnh) {
-  pnh_.param<std::string>("odom_frame", odom_frame_, "odom");
-  pnh_.param<std::string>("base_frame", base_frame_, "base_link");
+  pnh_.param<std::string>("odom_frame", odom_frame_, kOdomFrame);
+  pnh_.param<std::string>("base_frame", base_frame_, kBaseFrame);
   pnh_.param("publish_tf", publish_tf_, true);
   tf_timeout_s_ = paramAtLeast(pnh_, "tf_timeout_s", 0.1, 0.0);
   warn_period_s_ = paramAtLeast(pnh_, "warn_period_s", 5.0, 0.1);
@@ -60,32 +59,35 @@ VisualOdometryNode::VisualOdometryNode(ros::NodeHandle nh, ros::NodeHandle pnh)
       paramAtLeast(pnh_, "restart_sigma_rotation_rad", c.restart_sigma_rotation_rad, 0.0);
   vo_ = std::make_unique<VisualOdometry>(c);
 
-  std::string rgb_topic, depth_topic, info_topic;
-  pnh_.param<std::string>("rgb_topic", rgb_topic, "/head_camera/rgb/image_raw");
-  pnh_.param<std::string>("depth_topic", depth_topic, "/head_camera/depth_registered/image_raw");
-  pnh_.param<std::string>("camera_info_topic", info_topic, "/head_camera/rgb/camera_info");
-  const int queue = paramAtLeast(pnh_, "queue_size", 10, 1);
-  const double max_interval = paramAtLeast(pnh_, "sync_max_interval_s", 0.02, 0.0);
-
   odom_pub_ = pnh_.advertise<nav_msgs::Odometry>("odom", 10);
-  rgb_sub_.subscribe(nh_, rgb_topic, static_cast<uint32_t>(queue));
-  depth_sub_.subscribe(nh_, depth_topic, static_cast<uint32_t>(queue));
-  info_sub_.subscribe(nh_, info_topic, static_cast<uint32_t>(queue));
-  Policy policy(static_cast<uint32_t>(queue));
-  policy.setMaxIntervalDuration(ros::Duration(max_interval));
-  sync_ = std::make_unique<message_filters::Synchronizer<Policy>>(
-      static_cast<const Policy&>(policy), rgb_sub_, depth_sub_, info_sub_);
-  sync_->registerCallback(boost::bind(&VisualOdometryNode::onFrame, this, boost::placeholders::_1,
-                                      boost::placeholders::_2, boost::placeholders::_3));
+  // RGB-D without detections, through the same synchronised input path as the estimator; frames
+  // of one camera are closer in time than RGB-D and detections, hence the tighter default.
+  RgbdSubscriber::Config defaults;
+  defaults.max_interval_s = 0.02;
+  subscriber_ = std::make_unique<RgbdSubscriber>(
+      nh_, RgbdSubscriber::configFromParams(pnh_, warn_period_s_, false, defaults),
+      [this](const sensor_msgs::ImageConstPtr& rgb, const sensor_msgs::ImageConstPtr& depth,
+             const sensor_msgs::CameraInfoConstPtr& info,
+             const geofusion::DetectionArrayConstPtr&) { onFrame(rgb, depth, info); },
+      [this](const ros::Time& from, const ros::Time& to) { onTimeJump(from, to); });
 
   diagnostics_.setHardwareID("geofusion");
   diagnostics_.add("visual odometry", this, &VisualOdometryNode::diagnose);
   diagnostics_timer_ = pnh_.createWallTimer(
       ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { diagnostics_.force_update(); });
   ROS_INFO_STREAM("geofusion: visual odometry on "
-                  << rgb_sub_.getTopic() << ", " << depth_sub_.getTopic() << "; publishing "
+                  << subscriber_->topics()[0] << ", " << subscriber_->topics()[1] << "; publishing "
                   << odom_pub_.getTopic() << " and " << (publish_tf_ ? "" : "no ") << "TF "
                   << odom_frame_ << " -> " << (base_frame_.empty() ? "camera" : base_frame_));
+}
+
+// Time went back (a looping bag, a restarted driver; the subscriber has warned): the odometry
+// restarts at the next frame.
+void VisualOdometryNode::onTimeJump(const ros::Time&, const ros::Time&) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ROS_WARN("geofusion: visual odometry restarts after the jump back in time");
+  started_ = false;
+  have_last_ = false;
 }
 
 void VisualOdometryNode::onFrame(const sensor_msgs::ImageConstPtr& rgb,
@@ -94,13 +96,6 @@ void VisualOdometryNode::onFrame(const sensor_msgs::ImageConstPtr& rgb,
   std::lock_guard<std::mutex> lock(mutex_);
   ++frames_;
   const ros::Time stamp = rgb->header.stamp;
-  if (have_last_ && stamp + ros::Duration(0.5) < last_stamp_) {
-    ROS_WARN_STREAM("geofusion: visual odometry: time jumped back from "
-                    << last_stamp_ << " to " << stamp
-                    << " (a looping bag or restarted driver): odometry restarts");
-    started_ = false;
-    have_last_ = false;
-  }
   std::vector<std::uint8_t> gray;
   std::vector<float> metres;
   std::string error;

@@ -6,6 +6,7 @@
 //       [--depth-topic T] [--camera-info-topic T] [--detections-topic T] [--odom-frame odom]
 //       [--background FILE.bt] [--quiet]
 #include "command_line.h"
+#include "geofusion/common/robot_names.h"
 #include "geofusion/estimation/run_results.h"
 #include "geofusion/estimation/scene_estimator.h"
 #include "geofusion/ros/estimator_pipeline.h"
@@ -37,10 +38,10 @@ struct Options {
   std::string model_set = "primitives";
   std::string models_dir;
   int keyframe_every = 1;
-  std::string depth_topic = "/head_camera/depth_registered/image_raw";
-  std::string info_topic = "/head_camera/rgb/camera_info";
-  std::string detections_topic = "/detections";
-  std::string odom_frame = "odom";
+  std::string depth_topic = std::string("/") + geofusion::kDepthTopic;
+  std::string info_topic = std::string("/") + geofusion::kCameraInfoTopic;
+  std::string detections_topic = std::string("/") + geofusion::kDetectionsTopic;
+  std::string odom_frame = geofusion::kOdomFrame;
   std::string background;  ///< .bt file of the background OctoMap; empty: none
   bool quiet = false;
 };

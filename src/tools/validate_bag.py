@@ -26,6 +26,7 @@ import sys
 
 import genpy
 import rosbag
+import yaml
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE = 0, 1, 2
 
@@ -841,6 +842,23 @@ def validate(rec):
 
 # ----------------------------------------------------------------------------------------------
 
+def robot_names(path=None):
+    """The robot's topic and frame names: `path`, else the package's config/robots/fetch.yaml
+    (beside the source, or found through ROS in an install space)."""
+    if path is None:
+        here = os.path.dirname(os.path.abspath(__file__))
+        path = os.path.join(here, '..', '..', 'config', 'robots', 'fetch.yaml')
+        if not os.path.exists(path):
+            import roslib.packages
+            path = os.path.join(roslib.packages.get_pkg_dir('geofusion'), 'config', 'robots',
+                                'fetch.yaml')
+    with open(path) as f:
+        names = yaml.safe_load(f)
+    if not isinstance(names, dict):
+        raise ValueError('%s: not a mapping of names' % path)
+    return names
+
+
 def parse_args(argv):
     p = argparse.ArgumentParser(
         prog='validate_bag.py',
@@ -849,19 +867,32 @@ def parse_args(argv):
                     'detection content. Exit code 0: no errors, 1: errors, 2: usage problem or '
                     'unreadable bag.')
     p.add_argument('bag', help='the .bag file')
-    p.add_argument('--rgb-topic', default='/head_camera/rgb/image_raw')
-    p.add_argument('--depth-topic', default='/head_camera/depth_registered/image_raw')
-    p.add_argument('--camera-info-topic', default='/head_camera/rgb/camera_info')
-    p.add_argument('--detections-topic', default='/detections')
-    p.add_argument('--odom-topic', default='/odom')
-    p.add_argument('--odom-frame', default='odom')
-    p.add_argument('--base-frame', default='base_link')
+    p.add_argument('--robot', metavar='FILE',
+                   help='the robot\'s topic and frame names (default: the package\'s '
+                        'config/robots/fetch.yaml); the options below override single names')
+    p.add_argument('--rgb-topic')
+    p.add_argument('--depth-topic')
+    p.add_argument('--camera-info-topic')
+    p.add_argument('--detections-topic')
+    p.add_argument('--odom-topic')
+    p.add_argument('--odom-frame')
+    p.add_argument('--base-frame')
     p.add_argument('--max-sync-spread', type=float, default=0.05, metavar='SECONDS',
                    help='largest stamp spread of a synchronised RGB, depth and detections set '
                         '(default 0.05, as sync_max_interval_s)')
     p.add_argument('--quiet', action='store_true', help='print only errors, warnings and the '
                    'summary')
     args = p.parse_args(argv)
+    try:
+        robot = robot_names(args.robot)
+    except (OSError, ValueError, KeyError, yaml.YAMLError) as e:
+        p.error('cannot read the robot file: %s' % e)
+    for name, key in (('rgb_topic', 'rgb_topic'), ('depth_topic', 'depth_topic'),
+                      ('camera_info_topic', 'camera_info_topic'),
+                      ('detections_topic', 'detections_topic'), ('odom_topic', 'wheel_odom_topic'),
+                      ('odom_frame', 'odom_frame'), ('base_frame', 'base_frame')):
+        if getattr(args, name) is None:
+            setattr(args, name, robot[key])
     for name in ('rgb_topic', 'depth_topic', 'camera_info_topic', 'detections_topic',
                  'odom_topic'):
         topic = getattr(args, name)

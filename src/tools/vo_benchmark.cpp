@@ -6,6 +6,7 @@
 //   vo_benchmark --bag FILE.bag --ground-truth FILE_gt.yaml [--out-dir DIR] [--threads N]
 //       [--rgb-topic T] [--depth-topic T] [--camera-info-topic T] [--quiet]
 #include "command_line.h"
+#include "geofusion/common/robot_names.h"
 #include "geofusion/common/statistics.h"
 #include "geofusion/evaluation/trajectory_metrics.h"
 #include "geofusion/odometry/visual_odometry.h"
@@ -34,9 +35,9 @@ namespace {
 
 struct Options {
   std::string bag, ground_truth, out_dir = ".";
-  std::string rgb_topic = "/head_camera/rgb/image_raw";
-  std::string depth_topic = "/head_camera/depth_registered/image_raw";
-  std::string info_topic = "/head_camera/rgb/camera_info";
+  std::string rgb_topic = std::string("/") + geofusion::kRgbTopic;
+  std::string depth_topic = std::string("/") + geofusion::kDepthTopic;
+  std::string info_topic = std::string("/") + geofusion::kCameraInfoTopic;
   int threads = 1;
   bool quiet = false;
 };

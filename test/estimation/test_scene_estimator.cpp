@@ -131,8 +131,7 @@ TEST(SceneEstimator, MethodNames) {
 
 TEST(SceneEstimator, MethodsAreCompositionsOfTheSameStages) {
   const MethodStages fbf = stagesOf(Method::kFrameByFrame), bslam = stagesOf(Method::kBaselineSlam),
-                     rfront = stagesOf(Method::kRobustFrontEnd),
-                     geo = stagesOf(Method::kGeoFusion);
+                     rfront = stagesOf(Method::kRobustFrontEnd), geo = stagesOf(Method::kGeoFusion);
   EXPECT_TRUE(fbf.map_is_keyframe_detections);
   EXPECT_FALSE(fbf.stage_one || fbf.geometric_consistency || fbf.relations_and_stage_two);
   EXPECT_TRUE(bslam.stage_one && !bslam.geometric_consistency && !bslam.false_positive_removal);
@@ -156,7 +155,9 @@ TEST(SceneEstimator, KeyframesReportTheOutcomeOfEachStage) {
       EXPECT_EQ(r.stage_two.ran(), stage_two) << toString(method) << " kf " << r.keyframe;
       EXPECT_FALSE(r.stage_one.failed()) << toString(r.stage_one.status);
       EXPECT_FALSE(r.stage_two.failed()) << toString(r.stage_two.status);
-      if (r.stage_one.ran()) EXPECT_LE(r.stage_one.final_cost, r.stage_one.initial_cost);
+      if (r.stage_one.ran()) {
+        EXPECT_LE(r.stage_one.final_cost, r.stage_one.initial_cost);
+      }
     }
   }
 }

@@ -96,11 +96,11 @@ class DatasetTest(unittest.TestCase):
         images, detections, odom, tf = [], [], [], {}
         with rosbag.Bag(self.bag) as bag:
             for topic, msg, t in bag.read_messages():
-                if topic == '/head_camera/rgb/image_raw':
+                if topic == util.RGB_TOPIC:
                     images.append(msg.header.stamp.to_sec())
-                elif topic == '/detections':
+                elif topic == util.DETECTIONS_TOPIC:
                     detections.append(msg)
-                elif topic == '/odom':
+                elif topic == util.ODOM_TOPIC:
                     odom.append(msg)
                 elif topic == '/tf':
                     for tr in msg.transforms:
@@ -121,10 +121,10 @@ class DatasetTest(unittest.TestCase):
         drift = []
         for f in frames[::7]:
             stamp = round(float(f['stamp']), 6)
-            base = tf[('base_link', stamp)]
+            base = tf[(util.BASE_FRAME, stamp)]
             np.testing.assert_allclose(tf_matrix(base.transform), matrix(f['odom_base']),
                                        atol=1e-6)
-            head = tf_matrix(tf[('head_camera_link', stamp)].transform)
+            head = tf_matrix(tf[(util.CAMERA_LINK_FRAME, stamp)].transform)
             camera = matrix(f['map_base']) @ head @ link_optical
             np.testing.assert_allclose(camera, matrix(f['map_camera']), atol=1e-6)
             drift.append(np.linalg.norm(matrix(f['map_base'])[:3, 3] -

@@ -134,12 +134,12 @@ class EstimatorReplayTest(unittest.TestCase):
         values = {kv.key: kv.value for kv in last.values}
         self.assertGreaterEqual(int(values['keyframes']), KEYFRAMES - 1)
         self.assertIn('last keyframe ms: stage II', values)
-        self.assertIn('input rate /detections', values)
-        self.assertTrue(values['input rate /detections'].endswith(' Hz'))
+        self.assertIn('input rate ' + util.DETECTIONS_TOPIC, values)
+        self.assertTrue(values['input rate ' + util.DETECTIONS_TOPIC].endswith(' Hz'))
         self.assertGreaterEqual(int(values['sync drops']), 0)
-        rates = [float(d_values['input rate /detections'].split()[0]) for d_values in
+        rates = [float(d_values['input rate ' + util.DETECTIONS_TOPIC].split()[0]) for d_values in
                  ({kv.key: kv.value for kv in d.values} for d in mine)
-                 if 'input rate /detections' in d_values]
+                 if 'input rate ' + util.DETECTIONS_TOPIC in d_values]
         self.assertGreater(max(rates), 2.0, 'the detections rate never showed (5 Hz played)')
         # Save, then reset.
         rospy.wait_for_service(NS + '/save_map', 5.0)

@@ -70,19 +70,19 @@ class FaultTest(unittest.TestCase):
         self.assertGreaterEqual(len(frames), len(with_tf) - 1)
         malformed_frames = sum(1 for s in with_tf if gt_frames[s]['malformed'] > 0)
         self.assertGreater(malformed_frames, 5)
-        skipped = self.warned(warnings, '/detections', 'non-unit quaternion')
+        skipped = self.warned(warnings, util.DETECTIONS_TOPIC, 'non-unit quaternion')
         self.assertTrue(skipped, 'no warning about skipped detections: %s' % warnings)
         self.assertLess(len(skipped), malformed_frames, 'skip warnings are not throttled')
-        self.assertTrue(self.warned(warnings, 'no TF from', 'head_camera_rgb_optical_frame', 'odom'),
+        self.assertTrue(self.warned(warnings, 'no TF from', util.CAMERA_FRAME, util.ODOM_FRAME),
                         'no warning about missing TF: %s' % warnings)
-        self.assertTrue(self.warned(warnings, '/head_camera/rgb/image_raw', 'stopped'),
+        self.assertTrue(self.warned(warnings, util.RGB_TOPIC, 'stopped'),
                         'no warning about stopped inputs: %s' % warnings)
 
         util.play(bag_b)
         frames, warnings = self.take()
         self.assertEqual(len(frames), 0, 'unsynchronised detections produced markers')
         self.assertTrue(self.warned(warnings, 'time jumped back'), 'no time-jump warning: %s' % warnings)
-        self.assertTrue(self.warned(warnings, 'never synchronise', '/detections'),
+        self.assertTrue(self.warned(warnings, 'never synchronise', util.DETECTIONS_TOPIC),
                         'no warning about inputs that never synchronise: %s' % warnings)
 
         util.play(bag_c)

@@ -91,8 +91,24 @@ def match_objects(objects, gt, tolerance_m, frame=None):
     return matched, false
 
 
-INPUT_TOPICS = ['/head_camera/rgb/image_raw', '/head_camera/depth_registered/image_raw',
-                '/head_camera/rgb/camera_info', '/detections']
+def _robot_names():
+    """The robot's topic and frame names (config/robots/fetch.yaml, the one place they live)."""
+    with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', 'config',
+                           'robots', 'fetch.yaml')) as f:
+        return yaml.safe_load(f)
+
+
+ROBOT = _robot_names()
+RGB_TOPIC = '/' + ROBOT['rgb_topic']
+DEPTH_TOPIC = '/' + ROBOT['depth_topic']
+CAMERA_INFO_TOPIC = '/' + ROBOT['camera_info_topic']
+DETECTIONS_TOPIC = '/' + ROBOT['detections_topic']
+ODOM_TOPIC = '/' + ROBOT['wheel_odom_topic']
+ODOM_FRAME = ROBOT['odom_frame']
+BASE_FRAME = ROBOT['base_frame']
+CAMERA_LINK_FRAME = ROBOT['camera_link_frame']
+CAMERA_FRAME = ROBOT['camera_frame']
+INPUT_TOPICS = [RGB_TOPIC, DEPTH_TOPIC, CAMERA_INFO_TOPIC, DETECTIONS_TOPIC]
 
 
 def load_yaml(path):

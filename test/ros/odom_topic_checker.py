@@ -41,7 +41,7 @@ class OdomTopicTest(unittest.TestCase):
         suite = rospy.get_param('~suite', 'demo')
         scene = rospy.get_param('~scene', 'demo_01')
         keyframes = int(rospy.get_param('~keyframes', 20))
-        odom_topic = rospy.get_param('~odom_topic', '/odom')
+        odom_topic = rospy.get_param('~odom_topic', util.ODOM_TOPIC)
         odom_at_base = rospy.get_param('~odom_at_base', False)
         rate = float(rospy.get_param('~rate', 1.0))
         subprocess.check_call([util.find_tool('generate_dataset'), '--suite', suite, '--out-dir',

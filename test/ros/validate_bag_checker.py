@@ -21,9 +21,9 @@ import geofusion_test_utils as util  # noqa: E402
 
 VALIDATOR = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', 'src', 'tools',
                          'validate_bag.py')
-RGB = '/head_camera/rgb/image_raw'
-DEPTH = '/head_camera/depth_registered/image_raw'
-DETECTIONS = '/detections'
+RGB = util.RGB_TOPIC
+DEPTH = util.DEPTH_TOPIC
+DETECTIONS = util.DETECTIONS_TOPIC
 
 
 def run(*args):
@@ -174,7 +174,7 @@ class ValidateBagTest(unittest.TestCase):
         # The images are still in a known frame, and the frames now differ.
         self.assertFalse(lines_with(lines, ('ERROR',), RGB), '\n'.join(lines))
         self.assertTrue(lines_with(lines, ('WARNING: %s:' % DETECTIONS,), 'nowhere_frame',
-                                   'head_camera_rgb_optical_frame'), '\n'.join(lines))
+                                   util.CAMERA_FRAME), '\n'.join(lines))
 
     def test_looping_bag(self):
         bag = self.scratch('looping.bag')

@@ -68,7 +68,7 @@ class VisualOdometryReplayTest(unittest.TestCase):
         gt = util.load_yaml(os.path.join(self.dir, 'vo_orbit_gt.yaml'))
         without = os.path.join(self.dir, 'without_odom_tf.bag')
         self.assertGreater(util.strip_tf(bag, without, 'odom'), 0)
-        self.assertTrue(util.wait_for_graph(['/head_camera/rgb/image_raw'],
+        self.assertTrue(util.wait_for_graph([util.RGB_TOPIC],
                                             ['/visual_odometry/odom']),
                         'the visual odometry did not come up')
         time.sleep(1.0)
@@ -80,7 +80,7 @@ class VisualOdometryReplayTest(unittest.TestCase):
         truth = {round(f['stamp'], 3): matrix(f['map_base']) for f in gt['frames']}
         first = odom[0]
         self.assertEqual(first.header.frame_id, 'odom')
-        self.assertEqual(first.child_frame_id, 'base_link')
+        self.assertEqual(first.child_frame_id, util.BASE_FRAME)
         # odom starts at the base: the first pose is the identity.
         p = first.pose.pose
         self.assertLess(math.hypot(p.position.x, p.position.y, p.position.z), 1e-6)
@@ -105,7 +105,7 @@ class VisualOdometryReplayTest(unittest.TestCase):
         self.assertGreater(last_cov[0], first.pose.covariance[0], 'uncertainty did not grow')
         # TF odom -> base_link carries the same poses.
         mid = odom[len(odom) // 2]
-        t = self.tf_buffer.lookup_transform('odom', 'base_link', mid.header.stamp)
+        t = self.tf_buffer.lookup_transform(util.ODOM_FRAME, util.BASE_FRAME, mid.header.stamp)
         self.assertAlmostEqual(t.transform.translation.x, mid.pose.pose.position.x, places=6)
         self.assertAlmostEqual(t.transform.translation.y, mid.pose.pose.position.y, places=6)
 

@@ -4,6 +4,7 @@
 
 #include <yaml-cpp/yaml.h>
 #include "geofusion/common/atomic_file.h"
+#include "geofusion/common/pose_validation.h"
 
 #include <Eigen/Geometry>
 
@@ -31,7 +32,7 @@ inline Eigen::Isometry3d parsePose(const YAML::Node& n, const char* what) {
     throw std::runtime_error(std::string(what) + ": expected [x, y, z, qx, qy, qz, qw]");
   }
   Eigen::Quaterniond q(n[6].as<double>(), n[3].as<double>(), n[4].as<double>(), n[5].as<double>());
-  if (!(std::abs(q.norm() - 1.0) < 1e-3)) {
+  if (!(std::abs(q.norm() - 1.0) <= kUnitQuaternionTolerance)) {
     throw std::runtime_error(std::string(what) + ": quaternion is not unit");
   }
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();

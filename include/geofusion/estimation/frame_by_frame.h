@@ -3,6 +3,7 @@
 #pragma once
 
 #include "geofusion/common/measurement.h"
+#include "geofusion/common/pose_validation.h"
 
 #include <array>
 #include <cstddef>
@@ -52,7 +53,7 @@ class FrameByFrame {
     /// Detections farther than this from the camera centre are skipped (kOutOfRange), metres.
     double max_range_m = 10.0;
     /// Tolerance on | |q| - 1 | of incoming quaternions.
-    double unit_quaternion_tolerance = 1e-3;
+    double unit_quaternion_tolerance = kUnitQuaternionTolerance;
   };
 
   FrameByFrame() = default;

@@ -4,7 +4,7 @@
 #pragma once
 
 #include "geofusion/estimation/frame_by_frame.h"
-#include "geofusion/ros/rgbd_detection_subscriber.h"
+#include "geofusion/ros/rgbd_subscriber.h"
 
 #include <dynamic_reconfigure/server.h>
 #include <geofusion/DetectionViewerConfig.h>
@@ -52,7 +52,7 @@ class DetectionViewer {
   ros::WallTimer summary_timer_;
   boost::recursive_mutex reconfigure_mutex_;
   std::unique_ptr<dynamic_reconfigure::Server<geofusion::DetectionViewerConfig>> reconfigure_;
-  std::unique_ptr<RgbdDetectionSubscriber> subscriber_;
+  std::unique_ptr<RgbdSubscriber> subscriber_;
 };
 
 }  // namespace geofusion

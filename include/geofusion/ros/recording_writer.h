@@ -6,6 +6,7 @@
 
 #include "geofusion/common/camera.h"
 #include "geofusion/common/measurement.h"
+#include "geofusion/common/robot_names.h"
 
 #include <ros/time.h>
 #include <Eigen/Geometry>
@@ -22,16 +23,16 @@ class Bag;
 namespace geofusion {
 
 struct RecordingLayout {
-  std::string rgb_topic = "/head_camera/rgb/image_raw";
-  std::string rgb_info_topic = "/head_camera/rgb/camera_info";
-  std::string depth_topic = "/head_camera/depth_registered/image_raw";
-  std::string depth_info_topic = "/head_camera/depth_registered/camera_info";
-  std::string detections_topic = "/detections";
-  std::string odom_topic = "/odom";
-  std::string odom_frame = "odom";
-  std::string base_frame = "base_link";
-  std::string camera_link_frame = "head_camera_link";
-  std::string optical_frame = "head_camera_rgb_optical_frame";
+  std::string rgb_topic = std::string("/") + kRgbTopic;
+  std::string rgb_info_topic = std::string("/") + kRgbInfoTopic;
+  std::string depth_topic = std::string("/") + kDepthTopic;
+  std::string depth_info_topic = std::string("/") + kDepthInfoTopic;
+  std::string detections_topic = std::string("/") + kDetectionsTopic;
+  std::string odom_topic = std::string("/") + kOdomTopic;
+  std::string odom_frame = kOdomFrame;
+  std::string base_frame = kBaseFrame;
+  std::string camera_link_frame = kCameraLinkFrame;
+  std::string optical_frame = kOpticalFrame;
   std::string depth_encoding = "32FC1";  ///< or 16UC1 (millimetres, 0 = no reading)
   bool lz4 = false;                      ///< LZ4-compressed bag chunks
 };

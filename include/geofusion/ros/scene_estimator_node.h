@@ -5,7 +5,7 @@
 #pragma once
 
 #include "geofusion/ros/estimator_pipeline.h"
-#include "geofusion/ros/rgbd_detection_subscriber.h"
+#include "geofusion/ros/rgbd_subscriber.h"
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
@@ -77,7 +77,7 @@ class SceneEstimatorNode {
   ros::WallTime last_rates_time_;
   boost::recursive_mutex reconfigure_mutex_;
   std::unique_ptr<dynamic_reconfigure::Server<geofusion::SceneEstimatorConfig>> reconfigure_;
-  std::unique_ptr<RgbdDetectionSubscriber> subscriber_;
+  std::unique_ptr<RgbdSubscriber> subscriber_;
   // ~odom_topic: odometry messages go into odom_buffer_ as odom -> base (tf2 interpolates),
   // on their own queue and thread so that a frame waiting for its odometry never blocks their
   // arrival; base -> camera still comes from TF.

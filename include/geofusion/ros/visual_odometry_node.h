@@ -5,11 +5,9 @@
 #pragma once
 
 #include "geofusion/odometry/visual_odometry.h"
+#include "geofusion/ros/rgbd_subscriber.h"
 
 #include <diagnostic_updater/diagnostic_updater.h>
-#include <message_filters/subscriber.h>
-#include <message_filters/sync_policies/approximate_time.h>
-#include <message_filters/synchronizer.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -30,9 +28,7 @@ class VisualOdometryNode {
   VisualOdometryNode(ros::NodeHandle nh, ros::NodeHandle pnh);
 
  private:
-  using Policy =
-      message_filters::sync_policies::ApproximateTime<sensor_msgs::Image, sensor_msgs::Image,
-                                                      sensor_msgs::CameraInfo>;
+  void onTimeJump(const ros::Time& from, const ros::Time& to);
   void onFrame(const sensor_msgs::ImageConstPtr& rgb, const sensor_msgs::ImageConstPtr& depth,
                const sensor_msgs::CameraInfoConstPtr& info);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
@@ -56,9 +52,7 @@ class VisualOdometryNode {
   tf2_ros::TransformListener tf_listener_;
   tf2_ros::TransformBroadcaster tf_broadcaster_;
   ros::Publisher odom_pub_;
-  message_filters::Subscriber<sensor_msgs::Image> rgb_sub_, depth_sub_;
-  message_filters::Subscriber<sensor_msgs::CameraInfo> info_sub_;
-  std::unique_ptr<message_filters::Synchronizer<Policy>> sync_;
+  std::unique_ptr<RgbdSubscriber> subscriber_;
   diagnostic_updater::Updater diagnostics_;
   ros::WallTimer diagnostics_timer_;
 };

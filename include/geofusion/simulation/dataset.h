@@ -3,6 +3,7 @@
 // the generate_dataset tool writes the recordings (docs/dataset.md documents the file formats).
 #pragma once
 
+#include "geofusion/common/robot_names.h"
 #include "geofusion/simulation/clutter_scene.h"
 #include "geofusion/simulation/sequence.h"
 
@@ -81,9 +82,8 @@ struct GroundTruth {
   std::string model_set;    ///< name of the model set the classes come from
   std::string detector;     ///< detector preset
   PinholeIntrinsics intrinsics;
-  std::string map_frame = "map", odom_frame = "odom", base_frame = "base_link",
-              camera_link_frame = "head_camera_link",
-              camera_frame = "head_camera_rgb_optical_frame";
+  std::string map_frame = kMapFrame, odom_frame = kOdomFrame, base_frame = kBaseFrame,
+              camera_link_frame = kCameraLinkFrame, camera_frame = kOpticalFrame;
   ClutterScene scene;  ///< table, objects (map frame), contact graph
   std::vector<GroundTruthFrame> frames;
 };

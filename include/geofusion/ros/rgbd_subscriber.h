@@ -1,10 +1,12 @@
-// One reusable synchronised subscriber for RGB image + depth image + camera_info + detections
-// (approximate time). It watches its inputs and warns, naming the topics, when one stops arriving,
-// never arrives or when they never synchronise; and it notices time jumping backwards (a looping
-// bag), warns and restarts synchronisation.
+// The one input path of every node: synchronised RGB image + depth image + camera_info, and
+// detections when the node wants them (approximate time). It watches its inputs and warns, naming
+// the topics, when one stops arriving, never arrives or when they never synchronise; and it
+// notices time jumping backwards (a looping bag), warns and restarts synchronisation. The
+// estimator and the detection viewer take detections; the visual odometry takes RGB-D alone.
 #pragma once
 
 #include "geofusion/common/input_monitor.h"
+#include "geofusion/common/robot_names.h"
 
 #include <geofusion/DetectionArray.h>
 #include <image_transport/image_transport.h>
@@ -22,7 +24,7 @@
 
 namespace geofusion {
 
-class RgbdDetectionSubscriber {
+class RgbdSubscriber {
  public:
   struct Config {
     /// Topic names, resolved in the node's namespace; remap them or set these parameters.
@@ -42,28 +44,37 @@ class RgbdDetectionSubscriber {
   };
 
   /// The config from a node's private parameters (rgb_topic, depth_topic, camera_info_topic,
-  /// detections_topic, queue_size, sync_max_interval_s, stale_after_s, sync_timeout_s).
-  static Config configFromParams(const ros::NodeHandle& pnh, double warn_period_s);
+  /// detections_topic unless `with_detections` is false, queue_size, sync_max_interval_s,
+  /// stale_after_s, sync_timeout_s), `defaults` where a parameter is not set.
+  static Config configFromParams(const ros::NodeHandle& pnh, double warn_period_s,
+                                 bool with_detections, const Config& defaults);
+  static Config configFromParams(const ros::NodeHandle& pnh, double warn_period_s,
+                                 bool with_detections = true);
 
   using FrameCallback = std::function<void(
       const sensor_msgs::ImageConstPtr& rgb, const sensor_msgs::ImageConstPtr& depth,
       const sensor_msgs::CameraInfoConstPtr& info, const geofusion::DetectionArrayConstPtr& dets)>;
   using TimeJumpCallback = std::function<void(const ros::Time& from, const ros::Time& to)>;
 
-  RgbdDetectionSubscriber(ros::NodeHandle nh, const Config& config, FrameCallback on_frame,
-                          TimeJumpCallback on_time_jump = nullptr);
-  ~RgbdDetectionSubscriber();
+  RgbdSubscriber(ros::NodeHandle nh, const Config& config, FrameCallback on_frame,
+                 TimeJumpCallback on_time_jump = nullptr);
+  ~RgbdSubscriber();
 
-  /// The resolved topic names, in the order rgb, depth, camera_info, detections.
+  bool withDetections() const { return !config_.detections_topic.empty(); }
+  /// The resolved topic names, in the order rgb, depth, camera_info (, detections).
   std::vector<std::string> topics() const;
   std::size_t synchronizedCount() const;
   /// Messages received on each input (order of topics()) since the last reset or time jump.
   std::vector<std::size_t> messageCounts() const;
 
  private:
-  using Policy = message_filters::sync_policies::ApproximateTime<
+  using RgbdPolicy =
+      message_filters::sync_policies::ApproximateTime<sensor_msgs::Image, sensor_msgs::Image,
+                                                      sensor_msgs::CameraInfo>;
+  using DetectionPolicy = message_filters::sync_policies::ApproximateTime<
       sensor_msgs::Image, sensor_msgs::Image, sensor_msgs::CameraInfo, geofusion::DetectionArray>;
-  using Sync = message_filters::Synchronizer<Policy>;
+  using RgbdSync = message_filters::Synchronizer<RgbdPolicy>;
+  using DetectionSync = message_filters::Synchronizer<DetectionPolicy>;
 
   void makeSynchronizer();
   /// Watchdog bookkeeping and time-jump detection (restarts the synchroniser on a jump back).
@@ -90,7 +101,8 @@ class RgbdDetectionSubscriber {
   // from inside its own callback. sync_mutex_ serialises feeding, replacing and the frame
   // callback (which runs inside add()).
   std::mutex sync_mutex_;
-  std::unique_ptr<Sync> sync_;
+  std::unique_ptr<RgbdSync> rgbd_sync_;            // without detections
+  std::unique_ptr<DetectionSync> detection_sync_;  // with detections
   ros::WallTimer watchdog_;
   mutable std::mutex mutex_;
   std::unique_ptr<InputMonitor> monitor_;
