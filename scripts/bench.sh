@@ -6,6 +6,8 @@
 #   MODELS=DIR     YCB-Video models folder (default $GEOFUSION_YCB_DIR, else ../shared/data/ycb_video)
 #   GUARD=1        exit 1 unless GeoFusion beats FbF on mAP50:95 and precision50 (CI's guard)
 #   METHODS="..."  a subset of: fbf bslam rfront geofusion
+#   PARAMS=FILE    configuration file for every method (run_offline --params; the method itself
+#                  is set per run), PARAMS_<method>=FILE for one method (e.g. PARAMS_geofusion)
 set -euo pipefail
 source "$(dirname "$0")/env.sh"
 bash "$GEOFUSION_SRC/scripts/python_env.sh"
@@ -36,8 +38,12 @@ for bag in "${bags[@]}"; do
   mkdir -p "$out/runs/$scene" "$out/eval/$scene"
   for method in ${METHODS:-fbf bslam rfront geofusion}; do
     results="$out/runs/$scene/$method.yaml"
-    "$bin/run_offline" --bag "$bag" --out "$results" --method "$method" --model-set "$model_set" \
-      "${models[@]}" --quiet | sed 's/^run_offline: /  /'
+    params_var="PARAMS_$method"
+    params_file="${!params_var:-${PARAMS:-}}"
+    params=()
+    [ -n "$params_file" ] && params=(--params "$params_file")
+    "$bin/run_offline" --bag "$bag" --out "$results" "${params[@]}" --method "$method" \
+      --model-set "$model_set" "${models[@]}" --quiet | sed 's/^run_offline: /  /'
     "$bin/evaluate_run" --ground-truth "$gt" --results "$results" --model-set "$model_set" \
       "${models[@]}" --json "$out/eval/$scene/$method.json" --quiet
   done

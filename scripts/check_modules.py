@@ -13,7 +13,7 @@ import shutil
 import sys
 import tempfile
 
-RUNTIME = ["common", "model", "render", "estimation", "odometry", "background"]
+RUNTIME = ["common", "model", "render", "estimation", "odometry", "background", "config"]
 # module -> modules its files may include (itself included).
 ALLOWED = {
     "common": {"common"},
@@ -22,6 +22,7 @@ ALLOWED = {
     "estimation": {"common", "model", "render", "estimation"},
     "odometry": {"common", "odometry"},
     "background": {"common", "model", "render", "background"},
+    "config": {"common", "model", "render", "estimation", "odometry", "background", "config"},
     "simulation": set(RUNTIME) | {"simulation"},
     "evaluation": set(RUNTIME) | {"simulation", "evaluation"},
     "ros": set(RUNTIME) | {"ros"},

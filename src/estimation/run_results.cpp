@@ -100,6 +100,9 @@ bool writeRunResults(const std::string& path, const RunResults& r, std::string* 
   out << YAML::Key << "method" << YAML::Value << r.method;
   out << YAML::Key << "source" << YAML::Value << r.source;
   out << YAML::Key << "model_set" << YAML::Value << r.model_set;
+  if (!r.config_yaml.empty()) {
+    out << YAML::Key << "config" << YAML::Value << YAML::Load(r.config_yaml);
+  }
   out << YAML::Key << "recording_duration_s" << YAML::Value << r.recording_duration_s;
   out << YAML::Key << "wall_time_s" << YAML::Value << r.wall_time_s;
   out << YAML::Key << "peak_rss_mb" << YAML::Value << r.peak_rss_mb;
@@ -196,6 +199,7 @@ bool readRunResults(const std::string& path, const ModelSet& models, RunResults*
     r.method = root["method"].as<std::string>();
     r.source = root["source"].as<std::string>("");
     r.model_set = root["model_set"].as<std::string>("");
+    if (root["config"]) r.config_yaml = YAML::Dump(root["config"]);
     r.recording_duration_s = root["recording_duration_s"].as<double>();
     r.wall_time_s = root["wall_time_s"].as<double>();
     r.peak_rss_mb = root["peak_rss_mb"].as<double>(0.0);

@@ -7,6 +7,7 @@
 #include "geofusion/evaluation/metrics.h"
 #include "geofusion/simulation/clutter_scene.h"
 
+#include <yaml-cpp/yaml.h>
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
@@ -113,6 +114,7 @@ class KeyframeMatcher {
 void describeRun(const GroundTruth& gt, const RunResults& results, RunEvaluation* ev) {
   ev->scene = gt.scene_name;
   ev->method = results.method;
+  ev->config_yaml = results.config_yaml;
   ev->image_width = gt.intrinsics.width;
   ev->image_height = gt.intrinsics.height;
   std::set<std::pair<int, std::string>> classes;
@@ -333,6 +335,26 @@ bool evaluateRun(const GroundTruth& gt, const RunResults& results, const Evaluat
 
 namespace {
 
+// A YAML tree as JSON: maps and lists as they are, scalars as booleans, numbers or strings.
+nlohmann::json jsonOf(const YAML::Node& n) {
+  if (n.IsMap()) {
+    nlohmann::json j = nlohmann::json::object();
+    for (const auto& kv : n) j[kv.first.as<std::string>()] = jsonOf(kv.second);
+    return j;
+  }
+  if (n.IsSequence()) {
+    nlohmann::json j = nlohmann::json::array();
+    for (const auto& v : n) j.push_back(jsonOf(v));
+    return j;
+  }
+  if (!n.IsScalar()) return nullptr;
+  bool b;
+  double d;
+  if (n.Tag() != "!" && YAML::convert<bool>::decode(n, b)) return b;
+  if (n.Tag() != "!" && YAML::convert<double>::decode(n, d)) return d;
+  return n.Scalar();
+}
+
 nlohmann::json boxJson(const Box2d& b) {
   return nlohmann::json::array({b.x0, b.y0, b.width(), b.height()});
 }
@@ -361,6 +383,7 @@ bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::s
   j["format"] = "geofusion_evaluation_v1";
   j["scene"] = e.scene;
   j["method"] = e.method;
+  j["config"] = e.config_yaml.empty() ? nlohmann::json(nullptr) : jsonOf(YAML::Load(e.config_yaml));
   j["image_size"] = {e.image_width, e.image_height};
   j["categories"] = json::array();
   for (const auto& c : e.categories)

@@ -2,6 +2,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cstdlib>
+
 #include <cmath>
 
 namespace geofusion {
@@ -144,7 +146,7 @@ ModelSet ModelSet::builtinPrimitives() {
 }
 
 bool ModelSet::load(const std::string& yaml_path, const std::string& models_dir, ModelSet* set,
-                    std::vector<std::string>* errors) {
+                    std::vector<std::string>* errors, const SurfaceFeatureConfig& features) {
   YAML::Node root;
   try {
     root = YAML::LoadFile(yaml_path);
@@ -187,7 +189,7 @@ bool ModelSet::load(const std::string& yaml_path, const std::string& models_dir,
       }
       m.symmetry = parseSymmetry(c["symmetry"]);
       if (c["features"]) m.features = parseFeatures(c["features"]);
-      out.add(std::move(m));
+      out.add(std::move(m), features);
     } catch (const std::exception& e) {
       errors->push_back("model set '" + yaml_path + "', class " + name + ": " + e.what() +
                         "; class left out");
@@ -197,15 +199,43 @@ bool ModelSet::load(const std::string& yaml_path, const std::string& models_dir,
   return true;
 }
 
-bool loadModelSet(const std::string& spec, const std::string& models_dir, ModelSet* models,
-                  std::vector<std::string>* errors) {
-  if (spec == "primitives" || spec.empty()) {
+const std::vector<std::string>& modelSetNames() {
+  static const std::vector<std::string> names{"primitives", "ycb_video"};
+  return names;
+}
+
+bool loadModelSet(const std::string& name, const std::string& models_dir,
+                  const std::string& package_dir, ModelSet* models,
+                  std::vector<std::string>* errors, const SurfaceFeatureConfig& features) {
+  if (name == "primitives") {
     *models = ModelSet::builtinPrimitives();
     return true;
   }
-  if (!ModelSet::load(spec, models_dir, models, errors)) return false;
+  std::string path = name, dir = models_dir;
+  if (name == "ycb_video") {
+    path = package_dir + "/config/models/ycb_video.yaml";
+    const char* env = std::getenv("GEOFUSION_YCB_DIR");
+    if (dir.empty() && env) dir = env;
+    if (dir.empty()) {
+      errors->push_back(
+          "model set 'ycb_video' needs the folder of the YCB-Video meshes: set model_set.dir "
+          "(or $GEOFUSION_YCB_DIR)");
+      return false;
+    }
+  } else {
+    const auto ends = [&](const std::string& suffix) {
+      return path.size() > suffix.size() &&
+             path.compare(path.size() - suffix.size(), suffix.size(), suffix) == 0;
+    };
+    if (!ends(".yaml") && !ends(".yml")) {
+      errors->push_back("unknown model set '" + name +
+                        "': expected primitives, ycb_video or the path of a model-set YAML");
+      return false;
+    }
+  }
+  if (!ModelSet::load(path, dir, models, errors, features)) return false;
   if (models->size() == 0) {
-    errors->push_back("model set '" + spec + "' has no loadable class");
+    errors->push_back("model set '" + name + "' has no loadable class");
     return false;
   }
   return true;

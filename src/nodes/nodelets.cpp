@@ -1,4 +1,5 @@
-// Nodelet entry points: each only constructs the node class from the nodelet's handles.
+// Nodelet entry points: each constructs the node class from the nodelet's handles; a bad
+// configuration (the constructor throws) leaves the nodelet stopped with a FATAL message.
 #include "geofusion/ros/detection_viewer.h"
 #include "geofusion/ros/scene_estimator_node.h"
 #include "geofusion/ros/visual_odometry_node.h"
@@ -6,33 +7,28 @@
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
 
+#include <exception>
 #include <memory>
 
 namespace geofusion {
 
-class DetectionViewerNodelet : public nodelet::Nodelet {
+// Constructs the node; on a bad configuration says why and leaves it unstarted.
+template <class Node>
+class NodeletOf : public nodelet::Nodelet {
  private:
   void onInit() override {
-    viewer_ = std::make_unique<DetectionViewer>(getNodeHandle(), getPrivateNodeHandle());
+    try {
+      node_ = std::make_unique<Node>(getNodeHandle(), getPrivateNodeHandle());
+    } catch (const std::exception& e) {
+      NODELET_FATAL_STREAM("geofusion: " << e.what());
+    }
   }
-  std::unique_ptr<DetectionViewer> viewer_;
+  std::unique_ptr<Node> node_;
 };
 
-class SceneEstimatorNodelet : public nodelet::Nodelet {
- private:
-  void onInit() override {
-    node_ = std::make_unique<SceneEstimatorNode>(getNodeHandle(), getPrivateNodeHandle());
-  }
-  std::unique_ptr<SceneEstimatorNode> node_;
-};
-
-class VisualOdometryNodelet : public nodelet::Nodelet {
- private:
-  void onInit() override {
-    node_ = std::make_unique<VisualOdometryNode>(getNodeHandle(), getPrivateNodeHandle());
-  }
-  std::unique_ptr<VisualOdometryNode> node_;
-};
+class DetectionViewerNodelet : public NodeletOf<DetectionViewer> {};
+class SceneEstimatorNodelet : public NodeletOf<SceneEstimatorNode> {};
+class VisualOdometryNodelet : public NodeletOf<VisualOdometryNode> {};
 
 }  // namespace geofusion
 

@@ -3,11 +3,18 @@
 
 #include <ros/ros.h>
 
+#include <exception>
+
 int main(int argc, char** argv) {
   ros::init(argc, argv, "scene_estimator");
   ros::NodeHandle nh;
   ros::NodeHandle pnh("~");
-  geofusion::SceneEstimatorNode node(nh, pnh);
-  ros::spin();
+  try {
+    geofusion::SceneEstimatorNode node(nh, pnh);
+    ros::spin();
+  } catch (const std::exception& e) {  // a bad configuration: refuse to start, say why
+    ROS_FATAL_STREAM("geofusion: " << e.what());
+    return 1;
+  }
   return 0;
 }

@@ -2,6 +2,7 @@
 
 #include "geofusion/ros/conversions.h"
 #include "geofusion/ros/markers.h"
+#include "geofusion/ros/node_config.h"
 #include "geofusion/ros/params.h"
 #include "geofusion/ros/tf_lookup.h"
 
@@ -13,16 +14,14 @@ namespace geofusion {
 DetectionViewer::DetectionViewer(ros::NodeHandle nh, ros::NodeHandle pnh)
     : nh_(nh), pnh_(pnh), tf_listener_(tf_buffer_) {
   pnh_.param<std::string>("odom_frame", odom_frame_, kOdomFrame);
-  warn_period_s_ = paramAtLeast(pnh_, "warn_period_s", 5.0, 0.1);
-
-  FrameByFrame::Config fbf;
-  fbf.min_score = paramAtLeast(pnh_, "min_score", 0.0, 0.0);
-  fbf.max_range_m = paramAtLeast(pnh_, "max_range_m", 10.0, 0.1);
+  const GeoFusionConfig config = loadNodeConfig(pnh_, {"axis_length_m", "summary_period_s"});
+  warn_period_s_ = config.input.warn_period_s;
+  const FrameByFrame::Config fbf = config.checks;
   fbf_.setConfig(fbf);
   axis_length_m_ = paramAtLeast(pnh_, "axis_length_m", 0.05, 0.005);
-  tf_timeout_s_ = paramAtLeast(pnh_, "tf_timeout_s", 0.1, 0.0);
+  tf_timeout_s_ = config.input.tf_timeout_s;
 
-  const RgbdSubscriber::Config sub = RgbdSubscriber::configFromParams(pnh_, warn_period_s_);
+  const RgbdSubscriber::Config sub = RgbdSubscriber::configOf(pnh_, config.input);
 
   markers_pub_ = pnh_.advertise<visualization_msgs::MarkerArray>("detection_markers", 5);
 

@@ -1,15 +1,12 @@
 #include "geofusion/ros/rgbd_subscriber.h"
 
-#include "geofusion/ros/params.h"
-
 #include <boost/bind/bind.hpp>
 
 namespace geofusion {
 
-RgbdSubscriber::Config RgbdSubscriber::configFromParams(const ros::NodeHandle& pnh,
-                                                        double warn_period_s, bool with_detections,
-                                                        const Config& defaults) {
-  Config sub = defaults;
+RgbdSubscriber::Config RgbdSubscriber::configOf(const ros::NodeHandle& pnh,
+                                                const InputConfig& input, bool with_detections) {
+  Config sub;
   pnh.param("rgb_topic", sub.rgb_topic, sub.rgb_topic);
   pnh.param("depth_topic", sub.depth_topic, sub.depth_topic);
   pnh.param("camera_info_topic", sub.camera_info_topic, sub.camera_info_topic);
@@ -18,20 +15,12 @@ RgbdSubscriber::Config RgbdSubscriber::configFromParams(const ros::NodeHandle& p
   } else {
     sub.detections_topic.clear();
   }
-  sub.queue_size = paramAtLeast(pnh, "queue_size", defaults.queue_size, 1);
-  sub.max_interval_s = paramAtLeast(pnh, "sync_max_interval_s", defaults.max_interval_s, 0.0);
-  sub.warn_period_s = warn_period_s;
-  sub.monitor.stale_after_s =
-      paramAtLeast(pnh, "stale_after_s", defaults.monitor.stale_after_s, 0.1);
-  sub.monitor.sync_timeout_s =
-      paramAtLeast(pnh, "sync_timeout_s", defaults.monitor.sync_timeout_s, 0.1);
+  sub.queue_size = input.queue_size;
+  sub.max_interval_s = input.sync_max_interval_s;
+  sub.warn_period_s = input.warn_period_s;
+  sub.monitor.stale_after_s = input.stale_after_s;
+  sub.monitor.sync_timeout_s = input.sync_timeout_s;
   return sub;
-}
-
-RgbdSubscriber::Config RgbdSubscriber::configFromParams(const ros::NodeHandle& pnh,
-                                                        double warn_period_s,
-                                                        bool with_detections) {
-  return configFromParams(pnh, warn_period_s, with_detections, Config());
 }
 
 namespace {

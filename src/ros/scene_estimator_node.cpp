@@ -3,6 +3,7 @@
 #include "geofusion/estimation/run_results.h"
 #include "geofusion/ros/conversions.h"
 #include "geofusion/ros/map_messages.h"
+#include "geofusion/ros/node_config.h"
 #include "geofusion/ros/params.h"
 #include "geofusion/ros/tf_lookup.h"
 
@@ -24,48 +25,42 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
     : nh_(nh), pnh_(pnh), tf_listener_(tf_buffer_), diagnostics_(nh, pnh) {
   pnh_.param<std::string>("map_frame", map_frame_, kMapFrame);
   pnh_.param<std::string>("odom_frame", odom_frame_, kOdomFrame);
-  pnh_.param("publish_map_to_odom", publish_tf_, true);
-  pnh_.param<std::string>("save_on_shutdown", save_on_shutdown_, "");
-  tf_timeout_s_ = paramAtLeast(pnh_, "tf_timeout_s", 0.1, 0.0);
-  warn_period_s_ = paramAtLeast(pnh_, "warn_period_s", 5.0, 0.1);
-
-  EstimatorConfig config;
-  pnh_.param<std::string>("method", method_name_, "geofusion");
-  if (!parseMethod(method_name_, &config.method)) {
-    ROS_ERROR_STREAM("geofusion: unknown ~method '" << method_name_
-                                                    << "' (fbf, bslam, rfront, geofusion); using "
-                                                       "geofusion");
-    config.method = Method::kGeoFusion;
+  config_ = loadNodeConfig(pnh_, {"odometry", "odom_topic"});
+  // Where odometry comes from is the launch file's choice (odometry:=tf|topic|visual).
+  pnh_.param<std::string>("odom_topic", odom_topic_, "");
+  std::string odometry = odom_topic_.empty() ? "tf" : "topic";  // a plain node: ~odom_topic says
+  pnh_.param<std::string>("odometry", odometry, odometry);
+  if (odometry != "tf" && odometry != "topic" && odometry != "visual") {
+    throw std::runtime_error(
+        "~odometry (launch argument odometry): expected tf, topic or visual, "
+        "got '" +
+        odometry + "'; not starting");
   }
-  method_name_ = toString(config.method);
-  config.min_detection_score = paramAtLeast(pnh_, "min_score", 0.0, 0.0);
-  config.stage_one.every_n_keyframes = paramAtLeast(pnh_, "stage_one_every_n_keyframes", 10, 1);
-  KeyframeSelectorConfig keyframes;
-  keyframes.every_n_frames = paramAtLeast(pnh_, "keyframe_every_n_frames", 1, 1);
-  keyframes.min_translation_m = paramAtLeast(pnh_, "keyframe_translation_m", 0.0, 0.0);
-  keyframes.min_rotation_rad = paramAtLeast(pnh_, "keyframe_rotation_rad", 0.0, 0.0);
+  if (odometry != "tf" && odom_topic_.empty()) {
+    throw std::runtime_error("~odometry " + odometry +
+                             " needs ~odom_topic (launch argument odom_topic); not starting");
+  }
+  if (odometry == "tf") odom_topic_.clear();
+  publish_tf_ = config_.node.publish_map_to_odom;
+  save_on_shutdown_ = config_.node.save_on_shutdown;
+  tf_timeout_s_ = config_.input.tf_timeout_s;
+  warn_period_s_ = config_.input.warn_period_s;
+  background_publish_every_ = config_.node.background_publish_every;
+  method_name_ = toString(config_.estimator.method);
 
-  std::string model_set, models_dir;
-  pnh_.param<std::string>("model_set", model_set, "primitives");
-  pnh_.param<std::string>("models_dir", models_dir, "");
   ModelSet models;
   std::vector<std::string> errors;
-  if (!loadModelSet(model_set, models_dir, &models, &errors)) {
-    for (const auto& e : errors) ROS_ERROR_STREAM("geofusion: " << e);
-    ROS_ERROR_STREAM("geofusion: cannot load the model set '"
-                     << model_set << "'; using the built-in primitives");
-    models = ModelSet::builtinPrimitives();
-  } else {
-    for (const auto& e : errors) ROS_WARN_STREAM("geofusion: " << e);
+  if (!loadModelSet(config_.model_set.name, config_.model_set.dir, packageDir(), &models, &errors,
+                    config_.model_set.surface_features)) {
+    std::string all;
+    for (const auto& e : errors) all += "\n  " + e;
+    throw std::runtime_error("model_set.name: cannot load the model set '" +
+                             config_.model_set.name + "', not starting:" + all);
   }
-  bool background = true;
-  pnh_.param("background", background, true);
-  BackgroundMapConfig background_config;
-  background_config.resolution_m = paramAtLeast(pnh_, "background_resolution_m", 0.02, 0.002);
-  background_config.max_range_m = paramAtLeast(pnh_, "background_max_range_m", 2.5, 0.1);
-  background_publish_every_ = paramAtLeast(pnh_, "background_publish_every", 5, 1);
-  pipeline_ = std::make_unique<EstimatorPipeline>(models, config, keyframes, FrameByFrame::Config(),
-                                                  background ? &background_config : nullptr);
+  for (const auto& e : errors) ROS_WARN_STREAM("geofusion: " << e);
+  pipeline_ = std::make_unique<EstimatorPipeline>(
+      models, config_.estimator, config_.keyframes, config_.checks,
+      config_.background_enabled ? &config_.background : nullptr);
 
   map_pub_ = pnh_.advertise<geofusion::ObjectMap>("object_map", 1, true);
   markers_pub_ = pnh_.advertise<visualization_msgs::MarkerArray>("map_markers", 1, true);
@@ -83,22 +78,13 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   reconfigure_ = std::make_unique<dynamic_reconfigure::Server<geofusion::SceneEstimatorConfig>>(
       reconfigure_mutex_, pnh_);
   {
-    const EstimatorConfig& c = pipeline_->estimator().config();
-    geofusion::SceneEstimatorConfig initial;
-    initial.min_score = c.min_detection_score;
-    initial.tf_timeout_s = tf_timeout_s_;
-    initial.eps_new = c.association.eps_new;
-    initial.eps_fp = c.association.eps_fp;
-    initial.merge_ratio = c.association.merge_ratio;
-    initial.merge_min_penetration_m = c.association.merge_min_penetration_m;
-    initial.sigma_position_m = c.association.sigma_position_m;
-    initial.sigma_rotation_rad = c.association.sigma_rotation_rad;
-    initial.stage_one_every_n_keyframes = c.stage_one.every_n_keyframes;
-    initial.measurement_sigma_position_m = c.stage_one.measurement_sigma_position_m;
-    initial.measurement_sigma_rotation_rad = c.stage_one.measurement_sigma_rotation_rad;
-    initial.contact_sigma_distance_m = c.stage_two.contact_sigma_distance_m;
-    initial.contact_sigma_direction = c.stage_two.contact_sigma_direction;
-    initial.prior_sigma_position_m = c.stage_two.prior_sigma_position_m;
+    // dynamic_reconfigure starts from the loaded configuration, never from its compiled defaults.
+    geofusion::SceneEstimatorConfig initial = geofusion::SceneEstimatorConfig::__getDefault__();
+    dynamic_reconfigure::Config values;
+    initial.__toMessage__(values);
+    for (const std::string& name : fillReconfigure(config_, &values))
+      ROS_ERROR_STREAM("geofusion: cfg/SceneEstimator.cfg has '" << name << "', no setting has");
+    initial.__fromMessage__(values);
     reconfigure_->updateConfig(initial);
   }
   reconfigure_->setCallback(
@@ -109,7 +95,6 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   diagnostics_timer_ = pnh_.createWallTimer(
       ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { diagnostics_.force_update(); });
 
-  pnh_.param<std::string>("odom_topic", odom_topic_, "");
   if (!odom_topic_.empty()) {
     ros::NodeHandle odom_nh(nh_);
     odom_nh.setCallbackQueue(&odom_queue_);
@@ -121,7 +106,7 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
                                                 << odom_frame_ << " -> base");
   }
 
-  const RgbdSubscriber::Config sub = RgbdSubscriber::configFromParams(pnh_, warn_period_s_);
+  const RgbdSubscriber::Config sub = RgbdSubscriber::configOf(pnh_, config_.input);
   subscriber_ = std::make_unique<RgbdSubscriber>(
       nh_, sub,
       [this](const auto& rgb, const auto& depth, const auto& info, const auto& dets) {
@@ -343,24 +328,22 @@ void SceneEstimatorNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   status.add("last keyframe ms: background", pipeline_->lastBackgroundMs());
 }
 
-void SceneEstimatorNode::onReconfigure(geofusion::SceneEstimatorConfig& config, uint32_t) {
+void SceneEstimatorNode::onReconfigure(geofusion::SceneEstimatorConfig& values, uint32_t) {
   std::lock_guard<std::mutex> lock(mutex_);
-  EstimatorConfig c = pipeline_->estimator().config();
-  c.min_detection_score = config.min_score;
-  c.association.eps_new = config.eps_new;
-  c.association.eps_fp = config.eps_fp;
-  c.association.merge_ratio = config.merge_ratio;
-  c.association.merge_min_penetration_m = config.merge_min_penetration_m;
-  c.association.sigma_position_m = config.sigma_position_m;
-  c.association.sigma_rotation_rad = config.sigma_rotation_rad;
-  c.stage_one.every_n_keyframes = config.stage_one_every_n_keyframes;
-  c.stage_one.measurement_sigma_position_m = config.measurement_sigma_position_m;
-  c.stage_one.measurement_sigma_rotation_rad = config.measurement_sigma_rotation_rad;
-  c.stage_two.contact_sigma_distance_m = config.contact_sigma_distance_m;
-  c.stage_two.contact_sigma_direction = config.contact_sigma_direction;
-  c.stage_two.prior_sigma_position_m = config.prior_sigma_position_m;
-  pipeline_->estimator().setConfig(c);
-  tf_timeout_s_ = config.tf_timeout_s;
+  dynamic_reconfigure::Config message;
+  values.__toMessage__(message);
+  GeoFusionConfig changed = config_;
+  for (const std::string& problem : applyReconfigure(message, &changed)) {
+    ROS_WARN_STREAM("geofusion: dynamic_reconfigure: " << problem);
+  }
+  const std::string diff = configDiff(changed);
+  const bool any_change = diff != configDiff(config_);
+  config_ = changed;
+  pipeline_->estimator().setConfig(config_.estimator);
+  tf_timeout_s_ = config_.input.tf_timeout_s;
+  pnh_.setParam("effective_config", configYaml(config_));
+  if (any_change)
+    ROS_INFO_STREAM("geofusion: reconfigured; now different from the defaults:\n" << diff);
 }
 
 void SceneEstimatorNode::onOdometry(const nav_msgs::OdometryConstPtr& msg) {
@@ -422,6 +405,7 @@ bool SceneEstimatorNode::save(const std::string& prefix, std::string* message,
     std::lock_guard<std::mutex> lock(mutex_);
     results.method = method_name_;
     results.source = "scene_estimator_node";
+    results.config_yaml = configYaml(config_);
     results.final_map = pipeline_->estimator().numKeyframes() > 0 ? pipeline_->estimator().finish()
                                                                   : KeyframeResult();
     results.trajectory = pipeline_->estimator().trajectory();

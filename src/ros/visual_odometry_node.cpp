@@ -1,7 +1,7 @@
 #include "geofusion/ros/visual_odometry_node.h"
 
 #include "geofusion/ros/conversions.h"
-#include "geofusion/ros/params.h"
+#include "geofusion/ros/node_config.h"
 #include "geofusion/ros/tf_lookup.h"
 
 #include <tf2_eigen/tf2_eigen.h>
@@ -32,40 +32,16 @@ VisualOdometryNode::VisualOdometryNode(ros::NodeHandle nh, ros::NodeHandle pnh)
     : nh_(nh), pnh_(pnh), tf_listener_(tf_buffer_), diagnostics_(nh, pnh) {
   pnh_.param<std::string>("odom_frame", odom_frame_, kOdomFrame);
   pnh_.param<std::string>("base_frame", base_frame_, kBaseFrame);
-  pnh_.param("publish_tf", publish_tf_, true);
-  tf_timeout_s_ = paramAtLeast(pnh_, "tf_timeout_s", 0.1, 0.0);
-  warn_period_s_ = paramAtLeast(pnh_, "warn_period_s", 5.0, 0.1);
-
-  VisualOdometryConfig c;
-  c.features = paramAtLeast(pnh_, "features", c.features, 100);
-  c.pyramid_levels = paramAtLeast(pnh_, "pyramid_levels", c.pyramid_levels, 1);
-  c.fast_threshold = paramAtLeast(pnh_, "fast_threshold", c.fast_threshold, 1);
-  c.min_depth_m = paramAtLeast(pnh_, "min_depth_m", c.min_depth_m, 0.0);
-  c.max_depth_m = paramAtLeast(pnh_, "max_depth_m", c.max_depth_m, 0.1);
-  c.local_keyframes = paramAtLeast(pnh_, "local_keyframes", c.local_keyframes, 1);
-  c.min_inliers = paramAtLeast(pnh_, "min_inliers", c.min_inliers, 6);
-  c.keyframe_tracked_fraction =
-      paramAtLeast(pnh_, "keyframe_tracked_fraction", c.keyframe_tracked_fraction, 0.0);
-  c.keyframe_translation_m =
-      paramAtLeast(pnh_, "keyframe_translation_m", c.keyframe_translation_m, 0.0);
-  c.keyframe_rotation_rad =
-      paramAtLeast(pnh_, "keyframe_rotation_rad", c.keyframe_rotation_rad, 0.0);
-  c.max_speed_m_s = paramAtLeast(pnh_, "max_speed_m_s", c.max_speed_m_s, 0.01);
-  c.max_turn_rad_s = paramAtLeast(pnh_, "max_turn_rad_s", c.max_turn_rad_s, 0.01);
-  c.relocalise_frames = paramAtLeast(pnh_, "relocalise_frames", c.relocalise_frames, 1);
-  c.restart_sigma_position_m =
-      paramAtLeast(pnh_, "restart_sigma_position_m", c.restart_sigma_position_m, 0.0);
-  c.restart_sigma_rotation_rad =
-      paramAtLeast(pnh_, "restart_sigma_rotation_rad", c.restart_sigma_rotation_rad, 0.0);
-  vo_ = std::make_unique<VisualOdometry>(c);
+  pnh_.param("publish_tf", publish_tf_, true);  // a launch choice (vo_publish_tf)
+  const GeoFusionConfig config = loadNodeConfig(pnh_, {"publish_tf"});
+  tf_timeout_s_ = config.input.tf_timeout_s;
+  warn_period_s_ = config.input.warn_period_s;
+  vo_ = std::make_unique<VisualOdometry>(config.visual_odometry);
 
   odom_pub_ = pnh_.advertise<nav_msgs::Odometry>("odom", 10);
-  // RGB-D without detections, through the same synchronised input path as the estimator; frames
-  // of one camera are closer in time than RGB-D and detections, hence the tighter default.
-  RgbdSubscriber::Config defaults;
-  defaults.max_interval_s = 0.02;
+  // RGB-D without detections, through the same synchronised input path as the estimator.
   subscriber_ = std::make_unique<RgbdSubscriber>(
-      nh_, RgbdSubscriber::configFromParams(pnh_, warn_period_s_, false, defaults),
+      nh_, RgbdSubscriber::configOf(pnh_, config.input, false),
       [this](const sensor_msgs::ImageConstPtr& rgb, const sensor_msgs::ImageConstPtr& depth,
              const sensor_msgs::CameraInfoConstPtr& info,
              const geofusion::DetectionArrayConstPtr&) { onFrame(rgb, depth, info); },

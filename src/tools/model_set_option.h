@@ -19,16 +19,14 @@ inline std::string defaultYcbDir() {
   return env ? std::string(env) : std::string(GEOFUSION_SOURCE_DIR) + "/../shared/data/ycb_video";
 }
 
-/// Loads the model set of a --model-set value (primitives, ycb_video or a YAML file), saying what
-/// went wrong on stderr under the tool's name.
-inline bool loadModelSetOption(const std::string& tool, std::string spec, std::string dir,
-                               ModelSet* models) {
-  if (spec == "ycb_video") {
-    spec = std::string(GEOFUSION_SOURCE_DIR) + "/config/models/ycb_video.yaml";
-    if (dir.empty()) dir = defaultYcbDir();
-  }
+/// Loads the model set of a --model-set value (a name of the model-set table or a YAML file),
+/// saying what went wrong on stderr under the tool's name. The tools find the YCB-Video meshes
+/// beside the source tree when neither --models nor $GEOFUSION_YCB_DIR says where.
+inline bool loadModelSetOption(const std::string& tool, const std::string& spec, std::string dir,
+                               ModelSet* models, const SurfaceFeatureConfig& features = {}) {
+  if (spec == "ycb_video" && dir.empty()) dir = defaultYcbDir();
   std::vector<std::string> errors;
-  if (!loadModelSet(spec, dir, models, &errors)) {
+  if (!loadModelSet(spec, dir, GEOFUSION_SOURCE_DIR, models, &errors, features)) {
     std::cerr << tool << ": cannot load the model set " << spec << "\n";
     for (const auto& e : errors) std::cerr << "  " << e << "\n";
     return false;

@@ -1,12 +1,19 @@
 // run_offline: runs the scene estimator over a recording as fast as the machine allows (rosbag
 // C++ API, no ROS master) and writes a results file (docs/results.md).
 //
-//   run_offline --bag FILE.bag --out results.yaml [--method geofusion|fbf|bslam|rfront]
-//       [--model-set primitives|ycb_video|FILE.yaml] [--models DIR] [--keyframe-every N]
+//   run_offline --bag FILE.bag --out results.yaml [--params FILE.yaml] [--set KEY=VALUE]...
+//       [--method geofusion|fbf|bslam|rfront] [--model-set primitives|ycb_video|FILE.yaml]
+//       [--models DIR] [--keyframe-every N]
 //       [--depth-topic T] [--camera-info-topic T] [--detections-topic T] [--odom-frame odom]
 //       [--background FILE.bt] [--quiet]
+//   run_offline [--params FILE.yaml] [--set KEY=VALUE]... --print-params
+// The configuration is the nodes' (config/config.h): the file of --params, then --set and the
+// shorthands (--method = method, --model-set = model_set.name, --models = model_set.dir,
+// --keyframe-every = keyframes.every_n_frames) in the order given; it is written into the
+// results.
 #include "command_line.h"
 #include "geofusion/common/robot_names.h"
+#include "geofusion/config/config.h"
 #include "geofusion/estimation/run_results.h"
 #include "geofusion/estimation/scene_estimator.h"
 #include "geofusion/ros/estimator_pipeline.h"
@@ -34,10 +41,10 @@ namespace {
 
 struct Options {
   std::string bag, out;
-  std::string method = "geofusion";
-  std::string model_set = "primitives";
-  std::string models_dir;
-  int keyframe_every = 1;
+  std::string params;  ///< the configuration file
+  /// (key, value) overrides in the order given: --set and the shorthands.
+  std::vector<std::pair<std::string, std::string>> overrides;
+  bool print_params = false;
   std::string depth_topic = std::string("/") + geofusion::kDepthTopic;
   std::string info_topic = std::string("/") + geofusion::kCameraInfoTopic;
   std::string detections_topic = std::string("/") + geofusion::kDetectionsTopic;
@@ -47,12 +54,13 @@ struct Options {
 };
 
 void usage() {
-  std::cerr << "usage: run_offline --bag FILE.bag --out RESULTS.yaml [--method "
-               "geofusion|fbf|bslam|rfront]\n"
+  std::cerr << "usage: run_offline --bag FILE.bag --out RESULTS.yaml [--params FILE.yaml]\n"
+               "         [--set KEY=VALUE]... [--method geofusion|fbf|bslam|rfront]\n"
                "         [--model-set primitives|ycb_video|FILE.yaml] [--models DIR]\n"
-               "         [--keyframe-every N=1] [--depth-topic T] [--camera-info-topic T]\n"
+               "         [--keyframe-every N] [--depth-topic T] [--camera-info-topic T]\n"
                "         [--detections-topic T] [--odom-frame odom] [--background FILE.bt]\n"
-               "         [--quiet]\n";
+               "         [--quiet]\n"
+               "       run_offline [--params FILE.yaml] [--set KEY=VALUE]... --print-params\n";
 }
 
 Options parse(int argc, char** argv) {
@@ -60,10 +68,20 @@ Options parse(int argc, char** argv) {
   geofusion::CommandLine args;
   args.value("--bag", &o.bag);
   args.value("--out", &o.out);
-  args.value("--method", &o.method);
-  args.value("--model-set", &o.model_set);
-  args.value("--models", &o.models_dir);
-  args.value("--keyframe-every", &o.keyframe_every);
+  args.value("--params", &o.params);
+  auto shorthand = [&](const std::string& flag, const std::string& key) {
+    args.custom(flag, [&o, key](const std::string& v) { o.overrides.emplace_back(key, v); });
+  };
+  shorthand("--method", "method");
+  shorthand("--model-set", "model_set.name");
+  shorthand("--models", "model_set.dir");
+  shorthand("--keyframe-every", "keyframes.every_n_frames");
+  args.custom("--set", [&o](const std::string& v) {
+    const std::size_t eq = v.find('=');
+    if (eq == std::string::npos) throw std::runtime_error("--set expects KEY=VALUE, got " + v);
+    o.overrides.emplace_back(v.substr(0, eq), v.substr(eq + 1));
+  });
+  args.toggle("--print-params", &o.print_params);
   args.value("--depth-topic", &o.depth_topic);
   args.value("--camera-info-topic", &o.info_topic);
   args.value("--detections-topic", &o.detections_topic);
@@ -71,9 +89,23 @@ Options parse(int argc, char** argv) {
   args.value("--background", &o.background);
   args.toggle("--quiet", &o.quiet);
   args.parse(argc, argv, usage);
-  if (o.bag.empty() || o.out.empty()) throw std::runtime_error("--bag and --out are required");
-  if (o.keyframe_every < 1) throw std::runtime_error("--keyframe-every must be >= 1");
+  if (!o.print_params && (o.bag.empty() || o.out.empty()))
+    throw std::runtime_error("--bag and --out are required");
   return o;
+}
+
+// The configuration of the options: the file, then the overrides; every problem on stderr.
+bool configure(const Options& o, geofusion::GeoFusionConfig* config) {
+  geofusion::ConfigReport report;
+  if (!o.params.empty()) geofusion::loadConfigFile(o.params, config, &report);
+  for (const auto& [key, value] : o.overrides) {
+    std::string error;
+    if (!geofusion::setConfigValue(key, value, config, &error))
+      report.errors.push_back("command line: " + error);
+  }
+  for (const std::string& w : report.warnings) std::cerr << "run_offline: warning: " << w << "\n";
+  for (const std::string& e : report.errors) std::cerr << "run_offline: " << e << "\n";
+  return report.ok();
 }
 
 }  // namespace
@@ -81,17 +113,27 @@ Options parse(int argc, char** argv) {
 int main(int argc, char** argv) {
   using namespace geofusion;
   Options opt;
-  Method method;
   try {
     opt = parse(argc, argv);
-    if (!parseMethod(opt.method, &method)) throw std::runtime_error("unknown method " + opt.method);
   } catch (const std::exception& e) {
     std::cerr << "run_offline: " << e.what() << "\n";
     usage();
     return 2;
   }
+  GeoFusionConfig config;
+  if (!configure(opt, &config)) return 2;
+  if (opt.print_params) {
+    std::cout << configYaml(config);
+    return 0;
+  }
+  if (!opt.quiet)
+    std::cerr << "run_offline: configuration (differences from the defaults):\n"
+              << configDiff(config) << "\n";
+  const Method method = config.estimator.method;
   ModelSet models;
-  if (!loadModelSetOption("run_offline", opt.model_set, opt.models_dir, &models)) return 1;
+  if (!loadModelSetOption("run_offline", config.model_set.name, config.model_set.dir, &models,
+                          config.model_set.surface_features))
+    return 1;
 
   rosbag::Bag bag;
   try {
@@ -118,15 +160,12 @@ int main(int argc, char** argv) {
     }
   }
 
-  EstimatorConfig config;
-  config.method = method;
-  KeyframeSelectorConfig keyframes;
-  keyframes.every_n_frames = opt.keyframe_every;
-  const BackgroundMapConfig background_config;
-  EstimatorPipeline pipeline(models, config, keyframes, FrameByFrame::Config(),
+  const BackgroundMapConfig& background_config = config.background;
+  EstimatorPipeline pipeline(models, config.estimator, config.keyframes, config.checks,
                              opt.background.empty() ? nullptr : &background_config);
   RunResults results;
   results.method = toString(method);
+  results.config_yaml = configYaml(config);
   results.source = opt.bag;
   results.model_set = models.name();
   results.recording_duration_s = duration;

@@ -15,6 +15,8 @@ import sys
 import tempfile
 import unittest
 
+import yaml
+
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import geofusion_test_utils as util  # noqa: E402
@@ -154,13 +156,38 @@ class OfflineRunnerTest(unittest.TestCase):
                             '--method', 'orbslam'], stdout=subprocess.PIPE,
                            stderr=subprocess.PIPE, universal_newlines=True)
         self.assertEqual(p.returncode, 2)
-        self.assertIn('unknown method', p.stderr)
+        self.assertIn("method: expected one of geofusion, rfront, bslam, fbf, got 'orbslam'",
+                      p.stderr)
         p = subprocess.run([tool, '--bag', '/nonexistent.bag', '--out',
                             os.path.join(self.dir, 'y.yaml')], stdout=subprocess.PIPE,
                            stderr=subprocess.PIPE, universal_newlines=True)
         self.assertEqual(p.returncode, 1)
         self.assertIn('cannot read', p.stderr)
         self.assertFalse(os.path.exists(os.path.join(self.dir, 'y.yaml')))
+
+    def test_the_configuration_is_read_checked_and_recorded(self):
+        tool = util.find_tool('run_offline')
+        config_dir = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'config')
+        p = subprocess.run([tool, '--params', os.path.join(config_dir, 'estimator_settings.yaml'),
+                            '--set', 'stage_one.every_n_keyframes=5', '--print-params'],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        printed = yaml.safe_load(p.stdout)
+        self.assertEqual(printed['association']['eps_fp'], 0.5)
+        self.assertEqual(printed['stage_one']['window_keyframes'], 42)
+        self.assertEqual(printed['stage_one']['every_n_keyframes'], 5)
+        self.assertIn('association.eps_fb: unknown, did you mean association.eps_fp?', p.stderr)
+        p = subprocess.run([tool, '--params', os.path.join(config_dir, 'out_of_range.yaml'),
+                            '--bag', self.bag, '--out', os.path.join(self.dir, 'z.yaml')],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True)
+        self.assertEqual(p.returncode, 2)
+        self.assertIn('association.eps_fp: expected a number in [0.05, 1], got 7.5', p.stderr)
+        self.assertFalse(os.path.exists(os.path.join(self.dir, 'z.yaml')))
+        # Every results file says how it was made.
+        for method, (rc, out, res) in self.results.items():
+            self.assertEqual(rc, 0, out)
+            self.assertEqual(res['config']['method'], method)
+            self.assertEqual(res['config']['association']['eps_fp'], 0.55)
 
 
 if __name__ == '__main__':

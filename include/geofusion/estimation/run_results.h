@@ -15,6 +15,8 @@ struct RunResults {
   std::string method;
   std::string source;     ///< the recording
   std::string model_set;  ///< name of the model set
+  /// The effective configuration the run was made with (YAML of config/config.h's loader).
+  std::string config_yaml;
   double recording_duration_s = 0.0;
   double wall_time_s = 0.0;  ///< processing time of the whole run
   double peak_rss_mb = 0.0;  ///< the process's peak resident memory at the end (0: unknown)

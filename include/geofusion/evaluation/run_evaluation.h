@@ -89,6 +89,7 @@ struct GraphContact {
 
 struct RunEvaluation {
   std::string scene, method;
+  std::string config_yaml;  ///< the configuration the run was made with (from the results)
   int image_width = 0, image_height = 0;
   std::vector<std::pair<int, std::string>> categories;  ///< (class id, name) of the model set
   std::vector<std::pair<int, double>> images;           ///< (keyframe index, stamp)

@@ -48,7 +48,7 @@ class ModelSet {
   /// corrupt are left out and each gives one message in `errors` naming the file; the rest load.
   /// Returns false only when the YAML itself cannot be read or parsed.
   static bool load(const std::string& yaml_path, const std::string& models_dir, ModelSet* set,
-                   std::vector<std::string>* errors);
+                   std::vector<std::string>* errors, const SurfaceFeatureConfig& features = {});
 
   const ObjectModel* find(const std::string& name) const;
   const ObjectModel* findById(int id) const;
@@ -66,10 +66,17 @@ class ModelSet {
   std::map<std::string, std::size_t> by_name_;
 };
 
-/// Loads a model set: "primitives" (built in) or the path of a model-set YAML with meshes from
-/// `models_dir` (empty: the YAML's folder). False with the reasons in `errors` when nothing
-/// loads; classes that fail alone are reported in `errors` and left out.
-bool loadModelSet(const std::string& spec, const std::string& models_dir, ModelSet* models,
-                  std::vector<std::string>* errors);
+/// The model-set table, the names every entry point knows: "primitives" (built in),
+/// "ycb_video" (<package_dir>/config/models/ycb_video.yaml, meshes from the given folder or
+/// $GEOFUSION_YCB_DIR), or the path of a model-set YAML (.yaml / .yml).
+const std::vector<std::string>& modelSetNames();
+
+/// Loads the model set `name` of the table (models_dir: its meshes, "" for the default), with
+/// `features` for the surface features of meshes that do not list theirs. False with the reasons
+/// in `errors` for a name the table does not know, a file that does not load or a set with no
+/// loadable class; classes that fail alone are reported in `errors` and left out.
+bool loadModelSet(const std::string& name, const std::string& models_dir,
+                  const std::string& package_dir, ModelSet* models,
+                  std::vector<std::string>* errors, const SurfaceFeatureConfig& features = {});
 
 }  // namespace geofusion

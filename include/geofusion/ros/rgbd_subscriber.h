@@ -7,6 +7,7 @@
 
 #include "geofusion/common/input_monitor.h"
 #include "geofusion/common/robot_names.h"
+#include "geofusion/config/config.h"
 
 #include <geofusion/DetectionArray.h>
 #include <image_transport/image_transport.h>
@@ -43,13 +44,11 @@ class RgbdSubscriber {
     InputMonitor::Config monitor;
   };
 
-  /// The config from a node's private parameters (rgb_topic, depth_topic, camera_info_topic,
-  /// detections_topic unless `with_detections` is false, queue_size, sync_max_interval_s,
-  /// stale_after_s, sync_timeout_s), `defaults` where a parameter is not set.
-  static Config configFromParams(const ros::NodeHandle& pnh, double warn_period_s,
-                                 bool with_detections, const Config& defaults);
-  static Config configFromParams(const ros::NodeHandle& pnh, double warn_period_s,
-                                 bool with_detections = true);
+  /// The config of a node: topic names from its private parameters (rgb_topic, depth_topic,
+  /// camera_info_topic, and detections_topic unless `with_detections` is false: the robot file),
+  /// queue, synchronisation and watchdog from the configuration's input section.
+  static Config configOf(const ros::NodeHandle& pnh, const InputConfig& input,
+                         bool with_detections = true);
 
   using FrameCallback = std::function<void(
       const sensor_msgs::ImageConstPtr& rgb, const sensor_msgs::ImageConstPtr& depth,

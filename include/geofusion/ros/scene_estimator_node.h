@@ -4,6 +4,7 @@
 // (scene_estimator_node). Everything but the I/O is EstimatorPipeline, shared with run_offline.
 #pragma once
 
+#include "geofusion/config/config.h"
 #include "geofusion/ros/estimator_pipeline.h"
 #include "geofusion/ros/rgbd_subscriber.h"
 
@@ -56,6 +57,7 @@ class SceneEstimatorNode {
   bool publish_tf_ = true;
   std::string save_on_shutdown_;
   std::string method_name_;
+  GeoFusionConfig config_;  // the effective configuration (reconfigure changes it); under mutex_
 
   std::mutex mutex_;  // guards the pipeline and the last result
   std::unique_ptr<EstimatorPipeline> pipeline_;
