@@ -10,6 +10,7 @@
 #include "geofusion/common/statistics.h"
 #include "geofusion/model/object_model.h"
 #include "geofusion/render/consistency.h"
+#include "model_set_option.h"
 
 #include <sys/resource.h>
 
@@ -28,7 +29,7 @@
 using namespace geofusion;
 
 int main(int argc, char** argv) {
-  std::string models_dir = std::string(GEOFUSION_SOURCE_DIR) + "/../shared/data/ycb_video";
+  std::string models_dir = defaultYcbDir();
   int rounds = 40, stride = 1;
   bool full_frame = false;
   for (int i = 1; i < argc; ++i) {
@@ -50,7 +51,7 @@ int main(int argc, char** argv) {
 
   ModelSet models;
   std::vector<std::string> errors;
-  const std::string yaml = std::string(GEOFUSION_SOURCE_DIR) + "/config/models/ycb_video.yaml";
+  const std::string yaml = packageDir() + "/config/models/ycb_video.yaml";
   if (!std::ifstream(models_dir + "/classes.txt").good() ||
       !ModelSet::load(yaml, models_dir, &models, &errors) || models.size() == 0) {
     std::printf("YCB-Video models not found at %s: using the built-in primitives\n",

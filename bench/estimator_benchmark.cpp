@@ -15,6 +15,7 @@
 #include "geofusion/evaluation/sequence_calibration.h"
 #include "geofusion/render/renderer.h"
 #include "geofusion/simulation/dataset.h"
+#include "model_set_option.h"
 
 #include <sys/resource.h>
 
@@ -27,7 +28,7 @@
 
 int main(int argc, char** argv) {
   using namespace geofusion;
-  std::string models_dir = std::string(GEOFUSION_SOURCE_DIR) + "/../shared/data/ycb_video";
+  std::string models_dir = defaultYcbDir();
   int objects = 18, keyframes = 100;
   unsigned seed = 101;
   std::string detector = "densefusion", only;
@@ -70,10 +71,9 @@ int main(int argc, char** argv) {
   }
   ModelSet models;
   std::vector<std::string> errors;
-  const bool ycb =
-      ModelSet::load(std::string(GEOFUSION_SOURCE_DIR) + "/config/models/ycb_video.yaml",
-                     models_dir, &models, &errors) &&
-      models.size() > 0;
+  const bool ycb = ModelSet::load(packageDir() + "/config/models/ycb_video.yaml", models_dir,
+                                  &models, &errors) &&
+                   models.size() > 0;
   if (!ycb) {
     models = ModelSet::builtinPrimitives();
     std::printf("YCB-Video models not found in %s: using the built-in primitives\n",

@@ -18,9 +18,9 @@ const std::vector<std::pair<std::string, std::string>>& launchOverrides() {
 // Private parameters read outside the loader: the robot file's names, the node's own.
 bool readElsewhere(const std::string& name, const std::vector<std::string>& extra) {
   static const std::vector<std::string> known{
-      "params_file",       "effective_config", "rgb_topic",         "depth_topic",
-      "camera_info_topic", "detections_topic", "wheel_odom_topic",  "map_frame",
-      "odom_frame",        "base_frame",       "camera_link_frame", "camera_frame"};
+      "params_file",       "effective_config",  "config_warnings",  "rgb_topic", "depth_topic",
+      "camera_info_topic", "detections_topic",  "wheel_odom_topic", "map_frame", "odom_frame",
+      "base_frame",        "camera_link_frame", "camera_frame"};
   if (std::find(known.begin(), known.end(), name) != known.end()) return true;
   if (std::find(extra.begin(), extra.end(), name) != extra.end()) return true;
   for (const auto& o : launchOverrides())
@@ -107,6 +107,7 @@ GeoFusionConfig loadNodeConfig(const ros::NodeHandle& pnh,
       report.errors.push_back("~" + param + " (launch argument): " + error);
   }
   for (const std::string& w : report.warnings) ROS_WARN_STREAM("geofusion: " << w);
+  pnh.setParam("config_warnings", report.warnings);  // for users and tools that start it
   if (!report.ok()) {
     std::string all;
     for (const std::string& e : report.errors) all += "\n  " + e;

@@ -29,7 +29,7 @@ struct Options {
   std::string suite;
   std::string out_dir;
   std::string models_dir;
-  std::string model_set_yaml = std::string(GEOFUSION_SOURCE_DIR) + "/config/models/ycb_video.yaml";
+  std::string model_set_yaml = geofusion::packageDir() + "/config/models/ycb_video.yaml";
   std::vector<std::string> scenes;
   int keyframes = -1;
   int image_every = -1;

@@ -1,10 +1,14 @@
 // The tools' --model-set / --models options: "ycb_video" names the package's YCB-Video model set
 // (config/models/ycb_video.yaml) whose meshes come from --models, else $GEOFUSION_YCB_DIR, else
-// ../shared/data/ycb_video beside the package source. Tools define GEOFUSION_SOURCE_DIR.
+// ../shared/data/ycb_video beside the package's (real) folder: in a source checkout that is the
+// shared data, in an install space it is absent and the folder has to be given. The package is
+// found through ROS (ros::package), never through a path compiled in.
 #pragma once
 
 #include "geofusion/model/object_model.h"
+#include "geofusion/ros/node_config.h"
 
+#include <climits>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -16,7 +20,11 @@ namespace geofusion {
 /// The default YCB-Video models folder.
 inline std::string defaultYcbDir() {
   const char* env = std::getenv("GEOFUSION_YCB_DIR");
-  return env ? std::string(env) : std::string(GEOFUSION_SOURCE_DIR) + "/../shared/data/ycb_video";
+  if (env) return env;
+  char real[PATH_MAX];
+  const std::string package = packageDir();
+  return std::string(realpath(package.c_str(), real) ? real : package.c_str()) +
+         "/../shared/data/ycb_video";
 }
 
 /// Loads the model set of a --model-set value (a name of the model-set table or a YAML file),
@@ -26,7 +34,7 @@ inline bool loadModelSetOption(const std::string& tool, const std::string& spec,
                                ModelSet* models, const SurfaceFeatureConfig& features = {}) {
   if (spec == "ycb_video" && dir.empty()) dir = defaultYcbDir();
   std::vector<std::string> errors;
-  if (!loadModelSet(spec, dir, GEOFUSION_SOURCE_DIR, models, &errors, features)) {
+  if (!loadModelSet(spec, dir, packageDir(), models, &errors, features)) {
     std::cerr << tool << ": cannot load the model set " << spec << "\n";
     for (const auto& e : errors) std::cerr << "  " << e << "\n";
     return false;

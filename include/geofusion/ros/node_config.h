@@ -5,7 +5,7 @@
 // Unknown keys, and private parameters that no setting reads (an old flat parameter file
 // loaded with rosparam, a typo), are warned about with the nearest known key. The effective
 // configuration is printed once (what differs from the defaults at INFO, everything at DEBUG) and
-// kept in ~effective_config.
+// kept in ~effective_config, the file's warnings in ~config_warnings.
 #pragma once
 
 #include "geofusion/config/config.h"
