@@ -5,7 +5,9 @@ effective configuration), a typo key is warned about with the nearest key, and a
 out-of-range value, an unknown model set or a bogus odometry source refuses to start, naming the
 key."""
 import os
+import shutil
 import subprocess
+import tempfile
 import time
 import unittest
 
@@ -13,6 +15,8 @@ import rospy
 import rostest
 import yaml
 from dynamic_reconfigure.client import Client
+from geofusion.srv import SaveMap
+from std_srvs.srv import Trigger
 
 import geofusion_test_utils as util
 
@@ -77,6 +81,43 @@ class ConfigTest(unittest.TestCase):
         code, log = self.run_node('_odometry:=bogus')
         self.assertNotEqual(code, 0, log)
         self.assertIn('expected tf, topic or visual', log)
+
+    def test_4_run_offline_reproduces_the_node_from_its_saved_configuration(self):
+        """The saved map says how it was made; run_offline --params with that reproduces it."""
+        d = tempfile.mkdtemp(prefix='geofusion_config_')
+        try:
+            subprocess.check_call([util.find_tool('generate_dataset'), '--suite', 'demo',
+                                   '--out-dir', d, '--keyframes', '16', '--previews', '0'],
+                                  stdout=subprocess.DEVNULL)
+            bag = os.path.join(d, 'demo_01.bag')
+            self.assertTrue(util.wait_for_graph(util.INPUT_TOPICS, [NS + '/object_map']))
+            rospy.ServiceProxy(NS + '/reset', Trigger)()
+            util.play(bag, rate=0.5)
+            time.sleep(2.0)
+            rospy.wait_for_service(NS + '/save_map', 5.0)
+            self.assertTrue(rospy.ServiceProxy(NS + '/save_map', SaveMap)(
+                os.path.join(d, 'node')).success)
+            node = util.load_yaml(os.path.join(d, 'node.yaml'))
+            with open(os.path.join(d, 'config.yaml'), 'w') as f:
+                yaml.safe_dump(node['config'], f)
+            subprocess.check_call([util.find_tool('run_offline'), '--bag', bag, '--out',
+                                   os.path.join(d, 'offline.yaml'), '--params',
+                                   os.path.join(d, 'config.yaml'), '--quiet'],
+                                  stdout=subprocess.DEVNULL)
+            offline = util.load_yaml(os.path.join(d, 'offline.yaml'))
+            self.assertEqual(offline['config'], node['config'])
+            self.assertEqual(len(node['trajectory']), 16, 'the node skipped a keyframe')
+            self.assertEqual(len(offline['trajectory']), 16)
+            a, b = node['final_map']['objects'], offline['final_map']['objects']
+            self.assertEqual([o['class_name'] for o in a], [o['class_name'] for o in b])
+            worst = max(abs(x - y) for oa, ob in zip(a, b)
+                        for x, y in zip(oa['map_object'], ob['map_object']))
+            print('node vs run_offline: %d objects, largest pose difference %.2e' % (len(a), worst))
+            self.assertLess(worst, 1e-6)
+            self.assertEqual(len(node['final_map']['contacts']),
+                             len(offline['final_map']['contacts']))
+        finally:
+            shutil.rmtree(d, ignore_errors=True)
 
 
 if __name__ == '__main__':
