@@ -134,6 +134,9 @@ class Table {
          [](GeoFusionConfig& c) { return &c.input.stale_after_s; });
     real("input.sync_timeout_s", 0.1, 600, "watchdog: inputs that never synchronise, s",
          [](GeoFusionConfig& c) { return &c.input.sync_timeout_s; });
+    real("input.time_jump_tolerance_s", 0.01, 3600,
+         "stamps going back more than this: time jumped (a looping bag), the input restarts, s",
+         [](GeoFusionConfig& c) { return &c.input.time_jump_tolerance_s; });
     real(
         "input.tf_timeout_s", 0, 2, "wall-clock wait for the camera pose in TF, s",
         [](GeoFusionConfig& c) { return &c.input.tf_timeout_s; }, "tf_timeout_s");

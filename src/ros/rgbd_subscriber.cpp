@@ -17,6 +17,8 @@ RgbdSubscriber::Config RgbdSubscriber::configOf(const ros::NodeHandle& pnh,
   }
   sub.queue_size = input.queue_size;
   sub.max_interval_s = input.sync_max_interval_s;
+  sub.time_jump_tolerance_s = input.time_jump_tolerance_s;
+  sub.time_jump_tolerance_s = input.time_jump_tolerance_s;
   sub.warn_period_s = input.warn_period_s;
   sub.monitor.stale_after_s = input.stale_after_s;
   sub.monitor.sync_timeout_s = input.sync_timeout_s;

@@ -23,12 +23,13 @@ namespace geofusion {
 
 /// The synchronised inputs and the checks of each incoming frame and detection.
 struct InputConfig {
-  int queue_size = 10;                ///< messages queued per synchroniser input
-  double sync_max_interval_s = 0.05;  ///< largest stamp spread of a synchronised set
-  double stale_after_s = 3.0;         ///< watchdog: an input silent this long is reported
-  double sync_timeout_s = 3.0;        ///< ... all arriving but never synchronised this long
-  double tf_timeout_s = 0.1;          ///< wall-clock wait for the camera pose in TF
-  double warn_period_s = 5.0;         ///< throttle of repeated warnings
+  int queue_size = 10;                 ///< messages queued per synchroniser input
+  double sync_max_interval_s = 0.05;   ///< largest stamp spread of a synchronised set
+  double stale_after_s = 3.0;          ///< watchdog: an input silent this long is reported
+  double sync_timeout_s = 3.0;         ///< ... all arriving but never synchronised this long
+  double time_jump_tolerance_s = 1.0;  ///< stamps going back more: a looping bag, a restart
+  double tf_timeout_s = 0.1;           ///< wall-clock wait for the camera pose in TF
+  double warn_period_s = 5.0;          ///< throttle of repeated warnings
 };
 
 /// What only the ROS node does with the map (plain data: the core never reads it).
