@@ -1,20 +1,8 @@
-// Plain-node entry point of the frame-by-frame detection viewer.
+// Plain-node entry point of the frame-by-frame detection viewer (nodelet:
+// geofusion/DetectionViewerNodelet).
 #include "geofusion/ros/detection_viewer.h"
-
-#include <ros/ros.h>
-
-#include <exception>
+#include "geofusion/ros/node_main.h"
 
 int main(int argc, char** argv) {
-  ros::init(argc, argv, "detection_viewer");
-  ros::NodeHandle nh;
-  ros::NodeHandle pnh("~");
-  try {
-    geofusion::DetectionViewer viewer(nh, pnh);
-    ros::spin();
-  } catch (const std::exception& e) {  // a bad configuration: refuse to start, say why
-    ROS_FATAL_STREAM("geofusion: " << e.what());
-    return 1;
-  }
-  return 0;
+  return geofusion::runNode<geofusion::DetectionViewer>(argc, argv, "detection_viewer");
 }
