@@ -94,6 +94,15 @@ std::string describeSuite(const SuiteSpec& s) {
       t.look_rate != TrajectoryConfig().look_rate)
     o << "; look " << t.look_amplitude_m << " " << t.look_rate;
   if (s.textured_background) o << "; textured background";
+  const PersistentErrorModel& e = m.persistence;
+  if (e.enabled() || e.score_correctness != PersistentErrorModel().score_correctness) {
+    o << "; persistent " << e.bias_translation_m << " " << e.bias_rotation_rad << " "
+      << e.bias_correlation_keyframes << " " << e.ray_depth_fraction << " "
+      << e.ray_correlation_keyframes << " " << e.swap_stretch_rate << " " << e.swap_stretch_min
+      << "-" << e.swap_stretch_max << " " << e.miss_stretch_rate << " " << e.miss_stretch_min
+      << "-" << e.miss_stretch_max << " " << e.phantoms << " " << e.phantom_stretch_min << "-"
+      << e.phantom_stretch_max << " " << e.phantom_presence << " " << e.score_correctness;
+  }
   return o.str();
 }
 

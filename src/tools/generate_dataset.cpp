@@ -5,7 +5,7 @@
 //
 //   generate_dataset --suite demo|bench|vo|vo_fast [--out-dir DIR] [--models DIR] [--model-set
 //   YAML]
-//       [--scenes bench_01,...] [--keyframes N] [--image-every N] [--detector densefusion|posecnn]
+//       [--scenes bench_01,...] [--keyframes N] [--image-every N] [--detector densefusion|posecnn|densefusion_persistent|rgb]
 //       [--depth-encoding 16UC1|32FC1] [--no-compression] [--previews N] [--force]
 #include "command_line.h"
 #include "geofusion/evaluation/sequence_calibration.h"
@@ -44,7 +44,7 @@ void usage() {
   std::cerr
       << "usage: generate_dataset --suite demo|bench|vo|vo_fast [--out-dir DIR] [--models DIR]\n"
          "         [--model-set YAML] [--scenes NAME,NAME] [--keyframes N] [--image-every N]\n"
-         "         [--detector densefusion|posecnn] [--depth-encoding 16UC1|32FC1]\n"
+         "         [--detector densefusion|posecnn|densefusion_persistent|rgb] [--depth-encoding 16UC1|32FC1]\n"
          "         [--no-compression] [--previews N=4] [--force]\n"
          "  --out-dir      default $GEOFUSION_DATA/<suite>, else ~/.cache/geofusion/data/<suite>\n"
          "  --models       YCB-Video models folder (bench); default $GEOFUSION_YCB_DIR, else\n"
@@ -79,8 +79,10 @@ Options parse(int argc, char** argv) {
   args.toggle("--force", &o.force);
   args.parse(argc, argv, usage);
   if (o.suite.empty()) throw std::runtime_error("--suite is required");
-  if (o.detector != "densefusion" && o.detector != "posecnn") {
-    throw std::runtime_error("--detector must be densefusion or posecnn");
+  geofusion::DetectorModel preset;
+  if (!geofusion::DetectorModel::byName(o.detector, &preset)) {
+    throw std::runtime_error(
+        "--detector must be densefusion, posecnn, densefusion_persistent or rgb");
   }
   if (o.keyframes == 0 || o.keyframes < -1 || o.image_every == 0 || o.image_every < -1) {
     throw std::runtime_error("--keyframes and --image-every must be > 0");
@@ -142,7 +144,7 @@ int main(int argc, char** argv) {
   if (opt.image_every > 0) suite.image_every = opt.image_every;
   suite.trajectory.frames = suite.cameraFrames();
   suite.trajectory.rate_hz = suite.camera_rate_hz;
-  if (opt.detector == "posecnn") suite.detector = DetectorModel::posecnn();
+  if (opt.detector != "densefusion") DetectorModel::byName(opt.detector, &suite.detector);
   if (!opt.scenes.empty()) {
     std::vector<SceneSpec> chosen;
     for (const std::string& name : opt.scenes) {

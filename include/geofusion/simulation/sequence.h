@@ -8,10 +8,12 @@
 #include "geofusion/common/measurement.h"
 #include "geofusion/render/renderer.h"
 #include "geofusion/simulation/clutter_scene.h"
+#include "geofusion/simulation/detector_errors.h"
 
 #include <Eigen/Geometry>
 
 #include <cstdint>
+#include <memory>
 #include <random>
 #include <string>
 #include <utility>
@@ -114,8 +116,20 @@ struct DetectorModel {
       {"008_pudding_box", "009_gelatin_box"},
       {"005_tomato_soup_can", "007_tuna_fish_can"},
       {"024_bowl", "025_mug"}};
+  /// Errors that persist over keyframes (all off in the independent presets).
+  PersistentErrorModel persistence;
+
+  /// Independent errors per frame (the paper's setting): DenseFusion-like, PoseCNN-like.
   static DetectorModel denseFusion() { return DetectorModel(); }
   static DetectorModel posecnn();
+  /// Persistent errors of real estimators: DenseFusion-like with a slowly drifting bias,
+  /// swapped and missed stretches and a phantom; colour-only (MegaPose / PoseCNN RGB-like) with
+  /// centimetres of error along the viewing ray (docs/dataset.md).
+  static DetectorModel denseFusionPersistent();
+  static DetectorModel rgbOnly();
+  /// The preset of a name: densefusion, posecnn, densefusion_persistent, rgb. False for others.
+  static bool byName(const std::string& name, DetectorModel* model);
+  static const std::vector<std::string>& names();
 };
 
 /// One frame of a sequence: images, ground truth per object, detections.
@@ -154,15 +168,21 @@ class SequenceRenderer {
   std::vector<RenderItem> sceneItems(const Eigen::Isometry3d& T_cam_map) const;
   std::vector<PixelBox> measureVisibility(const std::vector<RenderItem>& items,
                                           SequenceFrame* frame);
+  void stepPersistentErrors(const DetectorModel& detector, const ModelSet& models,
+                            std::mt19937& rng);
   void detectObjects(const Eigen::Isometry3d& T_cam_map, const std::vector<PixelBox>& boxes,
                      const DetectorModel& detector, const ModelSet& models, Draws* draws,
                      SequenceFrame* frame) const;
+  void addPhantoms(const Eigen::Isometry3d& T_cam_map, const std::vector<PixelBox>& boxes,
+                   const DetectorModel& detector, const ModelSet& models, Draws* draws,
+                   SequenceFrame* frame) const;
   void addFalsePositives(const FramePose& pose, const std::vector<PixelBox>& boxes,
                          const DetectorModel& detector, const ModelSet& models, Draws* draws,
                          SequenceFrame* frame) const;
 
   const ClutterScene& scene_;
   PinholeIntrinsics K_;
+  std::unique_ptr<PersistentErrors> errors_;  ///< the detector's persistent errors, per sequence
   OffscreenRenderer renderer_;
   std::vector<MeshHandle> object_meshes_;
   MeshHandle table_mesh_ = -1, floor_mesh_ = -1;
