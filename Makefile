@@ -1,7 +1,7 @@
 # GeoFusion: the two commands a user needs.
 #   make demo   install what is missing, build, and run the demo
 #   make test   install what is missing, build, and run every test (exit code = result)
-#   make data SUITE=demo|bench   generate (or reuse) a data suite in ~/.cache/geofusion/data
+#   make data SUITE=demo|bench|bench_rgb   generate (or reuse) a data suite in ~/.cache/geofusion/data
 #   make bench [SUITE=demo]      the benchmark: four methods, report in results/<suite>/
 #   make vo-bench                the visual odometry benchmark, report in results/vo/
 .PHONY: demo test data bench vo-bench deps build lint clean help

@@ -3,9 +3,9 @@
 // rosbag with the topics of a real Fetch recording and a ground-truth YAML beside it. Prints the
 // calibration of the noisy inputs (detections' ADD-S per class, odometry drift, depth noise).
 //
-//   generate_dataset --suite demo|bench|vo|vo_fast [--out-dir DIR] [--models DIR] [--model-set
-//   YAML]
-//       [--scenes bench_01,...] [--keyframes N] [--image-every N] [--detector densefusion|posecnn|densefusion_persistent|rgb]
+//   generate_dataset --suite demo|bench|bench_rgb|vo|vo_fast [--out-dir DIR] [--models DIR]
+//       [--model-set YAML] [--scenes bench_01,...] [--keyframes N] [--image-every N]
+//       [--detector densefusion|posecnn|densefusion_persistent|rgb]
 //       [--depth-encoding 16UC1|32FC1] [--no-compression] [--previews N] [--force]
 #include "command_line.h"
 #include "geofusion/evaluation/sequence_calibration.h"
@@ -42,9 +42,10 @@ struct Options {
 
 void usage() {
   std::cerr
-      << "usage: generate_dataset --suite demo|bench|vo|vo_fast [--out-dir DIR] [--models DIR]\n"
-         "         [--model-set YAML] [--scenes NAME,NAME] [--keyframes N] [--image-every N]\n"
-         "         [--detector densefusion|posecnn|densefusion_persistent|rgb] [--depth-encoding 16UC1|32FC1]\n"
+      << "usage: generate_dataset --suite demo|bench|bench_rgb|vo|vo_fast [--out-dir DIR]\n"
+         "         [--models DIR] [--model-set YAML] [--scenes NAME,NAME] [--keyframes N]\n"
+         "         [--image-every N] [--detector densefusion|posecnn|densefusion_persistent|rgb]\n"
+         "         [--depth-encoding 16UC1|32FC1]\n"
          "         [--no-compression] [--previews N=4] [--force]\n"
          "  --out-dir      default $GEOFUSION_DATA/<suite>, else ~/.cache/geofusion/data/<suite>\n"
          "  --models       YCB-Video models folder (bench); default $GEOFUSION_YCB_DIR, else\n"
