@@ -44,6 +44,7 @@ bool suiteByName(const std::string& name, SuiteSpec* suite) {
     s.clutter.area_x_m = 0.45;
     s.clutter.area_y_m = 0.34;
     s.detector = DetectorModel::rgbOnly();
+    s.detector_name = "rgb";
   } else if (name == "vo" || name == "vo_fast") {
     // Visual odometry: every 30 Hz frame has images, table and floor are textured. "vo": the
     // table orbit of the other suites (15 s); "vo_fast": 10 s with a faster orbit and the head

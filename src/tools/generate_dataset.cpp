@@ -33,7 +33,7 @@ struct Options {
   std::vector<std::string> scenes;
   int keyframes = -1;
   int image_every = -1;
-  std::string detector = "densefusion";
+  std::string detector;  ///< "": the suite's own preset
   std::string depth_encoding = "16UC1";
   bool compress = true;
   int previews = 4;
@@ -51,6 +51,8 @@ void usage() {
          "  --models       YCB-Video models folder (bench); default $GEOFUSION_YCB_DIR, else\n"
          "                 ../shared/data/ycb_video beside the package source\n"
          "  --image-every  images and detections every Nth 30 Hz frame (suite default 6)\n"
+         "  --detector     detector preset (default the suite's: rgb for bench_rgb, else\n"
+         "                 densefusion; docs/dataset.md)\n"
          "  --previews     keyframes per scene written as PNG into <out-dir>/previews\n"
          "  --force        regenerate scenes whose cached files match the request\n";
 }
@@ -81,7 +83,7 @@ Options parse(int argc, char** argv) {
   args.parse(argc, argv, usage);
   if (o.suite.empty()) throw std::runtime_error("--suite is required");
   geofusion::DetectorModel preset;
-  if (!geofusion::DetectorModel::byName(o.detector, &preset)) {
+  if (!o.detector.empty() && !geofusion::DetectorModel::byName(o.detector, &preset)) {
     throw std::runtime_error(
         "--detector must be densefusion, posecnn, densefusion_persistent or rgb");
   }
@@ -145,7 +147,11 @@ int main(int argc, char** argv) {
   if (opt.image_every > 0) suite.image_every = opt.image_every;
   suite.trajectory.frames = suite.cameraFrames();
   suite.trajectory.rate_hz = suite.camera_rate_hz;
-  if (opt.detector != "densefusion") DetectorModel::byName(opt.detector, &suite.detector);
+  if (!opt.detector.empty()) {
+    DetectorModel::byName(opt.detector, &suite.detector);
+    suite.detector_name = opt.detector;
+  }
+  opt.detector = suite.detector_name;  // what the recordings and the printout say
   if (!opt.scenes.empty()) {
     std::vector<SceneSpec> chosen;
     for (const std::string& name : opt.scenes) {
