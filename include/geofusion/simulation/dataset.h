@@ -34,7 +34,7 @@ struct SuiteSpec {
   DepthNoise depth;
   DetectorModel detector;
   std::string detector_name = "densefusion";  ///< its preset (DetectorModel::byName)
-  double stamp_origin_s = 1600000000.0;  ///< ROS time of the first frame
+  double stamp_origin_s = 1600000000.0;       ///< ROS time of the first frame
   /// Table and floor textured (writeBackgroundTextures) instead of plain colours.
   bool textured_background = false;
 
