@@ -305,6 +305,67 @@ void evaluatePlausibility(const GroundTruth& gt, const RunResults& results, cons
   }
 }
 
+// Which true objects are in keyframe `k`'s map: an estimate of the class within the match
+// distance, in the truth's frame (the final trajectory alignment).
+std::vector<bool> mappedObjects(const GroundTruth& gt, const KeyframeResult& k,
+                                const EvaluationConfig& config,
+                                const Eigen::Isometry3d& T_true_est) {
+  std::vector<bool> mapped(gt.scene.objects.size(), false);
+  for (std::size_t i = 0; i < gt.scene.objects.size(); ++i) {
+    const SceneObject& truth = gt.scene.objects[i];
+    for (const ObjectEstimate& o : k.objects) {
+      if (o.model->name != truth.model->name) continue;
+      const Eigen::Vector3d p = T_true_est * o.T_map_obj.translation();
+      if ((p - truth.T_world_obj.translation()).norm() < config.lifecycle_match_m) {
+        mapped[i] = true;
+        break;
+      }
+    }
+  }
+  return mapped;
+}
+
+// Object lifecycle: for every true object, when it enters the online map, how often it leaves and
+// comes back, and whether a well-seen object is lost. Not for FbF (no map that persists).
+void evaluateLifecycle(const GroundTruth& gt, const RunResults& results,
+                       const KeyframeMatcher& frames, const MapScore& score,
+                       const EvaluationConfig& config, RunEvaluation* ev) {
+  ev->has_lifecycle = results.method != toString(Method::kFrameByFrame);
+  if (!ev->has_lifecycle) return;
+  const std::size_t n = gt.scene.objects.size();
+  std::vector<ObjectLifecycle> life(n);
+  std::vector<int> absence(n, 0);
+  std::vector<bool> was_mapped(n, false);
+  int t = 0;
+  for (const KeyframeResult& k : results.keyframes) {
+    const GroundTruthFrame* f = frames.at(k.stamp_s);
+    if (!f || f->visible_fraction.size() != n) continue;
+    const std::vector<bool> mapped = mappedObjects(gt, k, config, ev->T_true_est);
+    for (std::size_t i = 0; i < n; ++i) {
+      ObjectLifecycle& l = life[i];
+      l.object = static_cast<int>(i);
+      if (f->visible_fraction[i] >= config.well_seen_min_visible) ++l.well_seen_keyframes;
+      if (mapped[i]) {
+        if (l.first_mapped < 0) l.first_mapped = t;
+        if (!was_mapped[i] && absence[i] > 0) ++l.returns;
+        absence[i] = 0;
+      } else if (l.first_mapped >= 0) {
+        if (was_mapped[i]) ++l.departures;
+        l.longest_absence = std::max(l.longest_absence, ++absence[i]);
+      }
+      was_mapped[i] = mapped[i];
+    }
+    ++t;
+  }
+  for (int j : score.match)
+    if (j >= 0) life[static_cast<std::size_t>(j)].in_final_map = true;
+  for (ObjectLifecycle& l : life) {
+    l.lost = l.well_seen_keyframes >= config.well_seen_min_keyframes &&
+             (!l.in_final_map || l.longest_absence > config.lost_absence_keyframes);
+  }
+  ev->lifecycle = std::move(life);
+}
+
 }  // namespace
 
 bool evaluateRun(const GroundTruth& gt, const RunResults& results, const EvaluationConfig& config,
@@ -329,6 +390,7 @@ bool evaluateRun(const GroundTruth& gt, const RunResults& results, const Evaluat
   const MapScore score = evaluateFinalMap(gt, results.final_map.objects, config, &ev);
   evaluateContactGraph(gt, results, score, &ev);
   evaluatePlausibility(gt, results, score, config, &ev);
+  evaluateLifecycle(gt, results, frames, score, config, &ev);
   *evaluation = std::move(ev);
   return true;
 }
@@ -429,6 +491,25 @@ bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::s
                     {"contacts", contacts},
                     {"penetration_mm", scaled(e.penetration_m, 1000.0)},
                     {"gap_mm", scaled(e.gap_m, 1000.0)}};
+  json lifecycle = nullptr;
+  if (e.has_lifecycle) {
+    json objects = json::array();
+    int lost = 0, returns = 0;
+    for (const ObjectLifecycle& l : e.lifecycle) {
+      objects.push_back({{"object", l.object},
+                         {"well_seen_keyframes", l.well_seen_keyframes},
+                         {"first_mapped", l.first_mapped},
+                         {"departures", l.departures},
+                         {"returns", l.returns},
+                         {"longest_absence", l.longest_absence},
+                         {"in_final_map", l.in_final_map},
+                         {"lost", l.lost}});
+      lost += l.lost;
+      returns += l.returns;
+    }
+    lifecycle = {{"objects", objects}, {"lost", lost}, {"flip_flops", returns}};
+  }
+  j["lifecycle"] = lifecycle;
   json timings = json::object();
   auto series = [&](const char* name, double StageTimings::*field) {
     std::vector<double> v;

@@ -373,6 +373,17 @@ def final_map_figures(evals):
             'final_adds_under_1cm': float(np.mean(adds < 0.01)) if adds.size else None}
 
 
+def lifecycle_figures(evals):
+    """Object lifecycle summed over the scenes: lost well-seen objects, flip-flops (None for a
+    method without a persistent map)."""
+    lc = [ev.get('lifecycle') for ev in evals]
+    if not lc or any(x is None for x in lc):
+        return {'lifecycle_lost': None, 'lifecycle_flip_flops': None, 'lifecycle_objects': None}
+    return {'lifecycle_lost': sum(int(x.get('lost') or 0) for x in lc),
+            'lifecycle_flip_flops': sum(int(x.get('flip_flops') or 0) for x in lc),
+            'lifecycle_objects': sum(len(x.get('objects') or []) for x in lc)}
+
+
 def method_summary(evals):
     """Every measure for one method's evaluation files (one or more scenes)."""
     out = {'method': evals[0]['method'] if evals else None, 'scenes': len(evals)}
@@ -381,6 +392,7 @@ def method_summary(evals):
     out.update(physics_metrics(evals))
     out.update(timing_metrics(evals))
     out.update(final_map_figures(evals))
+    out.update(lifecycle_figures(evals))
     return out
 
 
@@ -788,6 +800,14 @@ def write_report(summary, out_dir, figures, command):
              _num(m['final_adds_under_1cm'], 3)] for n, m in methods.items()]
     md += ['Final maps:', ''] + _table(['method', 'objects / matched / true',
                                         'ADD-S mean (mm)', 'ADD-S < 1 cm'], rows) + ['']
+    rows = [[n, 'n/a' if m.get('lifecycle_lost') is None else str(m['lifecycle_lost']),
+             'n/a' if m.get('lifecycle_flip_flops') is None else str(m['lifecycle_flip_flops']),
+             'n/a' if m.get('lifecycle_objects') is None else str(m['lifecycle_objects'])]
+            for n, m in methods.items()]
+    md += ['Object lifecycle (online maps; lost = at least half visible in 20 keyframes, yet not in '
+           'the final map or out of the map for more than 10 keyframes after it entered; flip-flops'
+           ' = returns after leaving):', ''] + _table(['method', 'lost', 'flip-flops',
+                                                     'true objects'], rows) + ['']
 
     md += ['## Time', '']
     rows = [[n, _num(m['ms_per_keyframe_p50']), _num(m['ms_per_keyframe_p95']),

@@ -144,6 +144,46 @@ class RunEvaluationTest : public ::testing::Test {
   RunResults results;
 };
 
+// An object that leaves the online map for a keyframe and comes back: one departure, one return
+// (a flip-flop); lost only when it was well seen and the absence is longer than allowed.
+TEST_F(RunEvaluationTest, ObjectLifecycleCountsDeparturesReturnsAndLosses) {
+  results.keyframes[1].objects.pop_back();  // the brick is out of the map at keyframe 1
+  EvaluationConfig strict;
+  strict.well_seen_min_keyframes = 2;  // the brick is at least half visible in 2 keyframes
+  strict.lost_absence_keyframes = 0;
+  RunEvaluation ev;
+  std::string error;
+  ASSERT_TRUE(evaluateRun(gt, results, strict, &ev, &error)) << error;
+  ASSERT_TRUE(ev.has_lifecycle);
+  ASSERT_EQ(ev.lifecycle.size(), 2u);
+  const ObjectLifecycle& box = ev.lifecycle[0];
+  EXPECT_EQ(box.first_mapped, 0);
+  EXPECT_EQ(box.departures, 0);
+  EXPECT_EQ(box.returns, 0);
+  EXPECT_TRUE(box.in_final_map);
+  EXPECT_FALSE(box.lost);
+  const ObjectLifecycle& brick = ev.lifecycle[1];
+  EXPECT_EQ(brick.well_seen_keyframes, 2);
+  EXPECT_EQ(brick.first_mapped, 0);
+  EXPECT_EQ(brick.departures, 1);
+  EXPECT_EQ(brick.returns, 1);
+  EXPECT_EQ(brick.longest_absence, 1);
+  EXPECT_TRUE(brick.in_final_map);
+  EXPECT_TRUE(brick.lost);  // absent for 1 keyframe > 0 allowed
+  // With the default thresholds (20 well-seen keyframes) nothing here counts as lost.
+  const RunEvaluation relaxed = evaluate();
+  for (const ObjectLifecycle& l : relaxed.lifecycle) EXPECT_FALSE(l.lost);
+  // A map that moved away is not "in the map": an estimate 10 cm off is another object.
+  results.keyframes[2].objects[0].T_map_obj.translation().x() += 0.1;
+  ASSERT_TRUE(evaluateRun(gt, results, strict, &ev, &error));
+  EXPECT_EQ(ev.lifecycle[0].departures, 1);
+  EXPECT_EQ(ev.lifecycle[0].returns, 0);
+  // FbF has no persistent map: no lifecycle.
+  results.method = "FbF";
+  ASSERT_TRUE(evaluateRun(gt, results, strict, &ev, &error));
+  EXPECT_FALSE(ev.has_lifecycle);
+}
+
 TEST_F(RunEvaluationTest, PerfectEstimatesMatchEverythingWithZeroError) {
   const RunEvaluation ev = evaluate();
   ASSERT_EQ(ev.images.size(), 3u);

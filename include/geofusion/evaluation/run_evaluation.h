@@ -49,6 +49,27 @@ struct EvaluationConfig {
   double adds_min_iou = 0.45;
   /// Results keyframes find their ground-truth frame by stamp within this.
   double stamp_tolerance_s = 0.005;
+  /// Object lifecycle: a true object is in a keyframe's map when an estimate of its class lies
+  /// within this distance of it (map frame aligned by the trajectories) ...
+  double lifecycle_match_m = 0.05;
+  /// ... it is well seen with at least this many keyframes at least this visible ...
+  int well_seen_min_keyframes = 20;
+  double well_seen_min_visible = 0.5;
+  /// ... and lost when well seen yet not in the final map, or out of the map for more than this
+  /// many keyframes after it was first mapped.
+  int lost_absence_keyframes = 10;
+};
+
+/// A true object's life in the online map over a run.
+struct ObjectLifecycle {
+  int object = -1;              ///< ground-truth object index
+  int well_seen_keyframes = 0;  ///< keyframes in which it is at least well_seen_min_visible
+  int first_mapped = -1;        ///< first keyframe (results order) it is in the map; -1 never
+  int departures = 0;           ///< times it left the map after being in it
+  int returns = 0;              ///< departures followed by a return (flip-flops)
+  int longest_absence = 0;      ///< longest stretch out of the map after first_mapped, keyframes
+  bool in_final_map = false;    ///< matched in the final map
+  bool lost = false;            ///< well seen, yet absent at the end or for too long
 };
 
 struct GroundTruthBox {
@@ -110,6 +131,10 @@ struct RunEvaluation {
   std::vector<double> gap_m;              ///< per true support of a matched object
   std::vector<GraphObject> graph_true_objects, graph_estimated_objects;
   std::vector<GraphContact> graph_true_contacts, graph_estimated_contacts;
+
+  /// Per true object (empty for FbF, whose map is each keyframe's detections).
+  bool has_lifecycle = false;
+  std::vector<ObjectLifecycle> lifecycle;
 
   std::vector<StageTimings> timings;  ///< per keyframe
   double recording_duration_s = 0.0, wall_time_s = 0.0, peak_rss_mb = 0.0;
