@@ -22,6 +22,7 @@ DetectionViewer::DetectionViewer(ros::NodeHandle nh, ros::NodeHandle pnh)
   tf_timeout_s_ = config.input.tf_timeout_s;
 
   const RgbdSubscriber::Config sub = RgbdSubscriber::configOf(pnh_, config.input);
+  publishEffectiveConfig(pnh_, config);
 
   markers_pub_ = pnh_.advertise<visualization_msgs::MarkerArray>("detection_markers", 5);
 

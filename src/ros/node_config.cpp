@@ -118,10 +118,12 @@ GeoFusionConfig loadNodeConfig(const ros::NodeHandle& pnh,
                   << (params_file.empty() ? "(no ~params_file)" : "from " + params_file)
                   << ", what differs from the defaults:\n"
                   << configDiff(config));
-  const std::string yaml = configYaml(config);
-  ROS_DEBUG_STREAM("geofusion: the whole effective configuration:\n" << yaml);
-  pnh.setParam("effective_config", yaml);
+  ROS_DEBUG_STREAM("geofusion: the whole effective configuration:\n" << configYaml(config));
   return config;
+}
+
+void publishEffectiveConfig(const ros::NodeHandle& pnh, const GeoFusionConfig& config) {
+  pnh.setParam("effective_config", configYaml(config));
 }
 
 }  // namespace geofusion

@@ -116,6 +116,7 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   ROS_INFO_STREAM("geofusion: scene estimator (" << method_name_ << ", " << models.size()
                                                  << " classes from " << models.name()
                                                  << ") in frame " << map_frame_);
+  publishEffectiveConfig(pnh_, config_);
 }
 
 SceneEstimatorNode::~SceneEstimatorNode() {
@@ -341,7 +342,7 @@ void SceneEstimatorNode::onReconfigure(geofusion::SceneEstimatorConfig& values, 
   config_ = changed;
   pipeline_->estimator().setConfig(config_.estimator);
   tf_timeout_s_ = config_.input.tf_timeout_s;
-  pnh_.setParam("effective_config", configYaml(config_));
+  publishEffectiveConfig(pnh_, config_);
   if (any_change)
     ROS_INFO_STREAM("geofusion: reconfigured; now different from the defaults:\n" << diff);
 }

@@ -37,6 +37,7 @@ VisualOdometryNode::VisualOdometryNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   tf_timeout_s_ = config.input.tf_timeout_s;
   warn_period_s_ = config.input.warn_period_s;
   vo_ = std::make_unique<VisualOdometry>(config.visual_odometry);
+  publishEffectiveConfig(pnh_, config);
 
   odom_pub_ = pnh_.advertise<nav_msgs::Odometry>("odom", 10);
   // RGB-D without detections, through the same synchronised input path as the estimator.

@@ -42,7 +42,9 @@ class ConfigTest(unittest.TestCase):
         self.assertEqual(effective['stage_one']['window_keyframes'], 42)  # compile-only before
         self.assertEqual(effective['stage_one']['every_n_keyframes'], 10)  # untouched default
         # dynamic_reconfigure started from the file, not from its compiled defaults.
-        current = Client(NS, timeout=10).get_configuration(timeout=10)
+        client = Client(NS, timeout=10)
+        self.wait_for(lambda: abs(client.get_configuration(timeout=10)['eps_fp'] - 0.5) < 1e-9, 5)
+        current = client.get_configuration(timeout=10)
         self.assertAlmostEqual(current['eps_fp'], 0.5)
         self.assertAlmostEqual(current['sigma_position_m'], 0.05)
         # A reconfigure goes through the loader's range check and into the effective config.

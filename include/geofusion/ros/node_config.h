@@ -4,8 +4,9 @@
 // value, unknown choice) throws std::runtime_error naming the key: the node refuses to start.
 // Unknown keys, and private parameters that no setting reads (an old flat parameter file
 // loaded with rosparam, a typo), are warned about with the nearest known key. The effective
-// configuration is printed once (what differs from the defaults at INFO, everything at DEBUG) and
-// kept in ~effective_config, the file's warnings in ~config_warnings.
+// configuration is printed once (what differs from the defaults at INFO, everything at DEBUG), the
+// file's warnings kept in ~config_warnings; the node publishes ~effective_config once it runs
+// with it (publishEffectiveConfig).
 #pragma once
 
 #include "geofusion/config/config.h"
@@ -22,6 +23,10 @@ namespace geofusion {
 /// parameters the node reads itself (not warned about).
 GeoFusionConfig loadNodeConfig(const ros::NodeHandle& pnh,
                                const std::vector<std::string>& extra_params = {});
+
+/// ~effective_config: the configuration the node runs with, as YAML. Set last in a node's
+/// constructor (and after a reconfigure), so that a reader sees the node as configured.
+void publishEffectiveConfig(const ros::NodeHandle& pnh, const GeoFusionConfig& config);
 
 /// Sets every reconfigurable setting's value from `config` in a dynamic_reconfigure state (e.g. one
 /// from the generated config's __toMessage__); returns the message's names no setting has.
