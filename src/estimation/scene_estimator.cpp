@@ -130,52 +130,48 @@ KeyframeResult SceneEstimator::result(int keyframe, double stamp) const {
 
 KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
   const auto start = Clock::now();
-  KeyframeResult out;
+  StageTimings timings;
   const int t = static_cast<int>(T_map_cam_.size());
   appendCameraPose(kf);
 
   auto t0 = Clock::now();
   const ScoredDetections detections = scoreDetections(kf);
-  out.timings.consistency_ms = msSince(t0);
+  timings.consistency_ms = msSince(t0);
 
   t0 = Clock::now();
-  std::vector<int> detection_object;
-  if (stages_.map_is_keyframe_detections) {
-    detection_object = mapKeyframeDetections(kf, detections, t);
-  } else {
-    detection_object = associateDetections(kf, detections, t);
-  }
+  std::vector<int> detection_object = stages_.map_is_keyframe_detections
+                                          ? mapKeyframeDetections(kf, detections, t)
+                                          : associateDetections(kf, detections, t);
+  std::vector<int> removed;
   if (stages_.false_positive_removal) {
     std::vector<int> touched;
     for (int id : detection_object)
       if (id >= 0) touched.push_back(id);
-    removeFalsePositives(touched, t, &out.removed_ids);
-    mergeOverlapping(&out.removed_ids);
+    removeFalsePositives(touched, t, &removed);
+    mergeOverlapping(&removed);
     for (int& id : detection_object) {
-      if (std::find(out.removed_ids.begin(), out.removed_ids.end(), id) != out.removed_ids.end())
-        id = -1;
+      if (std::find(removed.begin(), removed.end(), id) != removed.end()) id = -1;
     }
   }
-  out.timings.association_ms = msSince(t0);
+  timings.association_ms = msSince(t0);
 
+  StageReport stage_one, stage_two;
   if (stages_.stage_one && stageOneDue(t)) {
     t0 = Clock::now();
-    out.stage_one = runStageOne();
-    out.timings.stage_one_ms = msSince(t0);
-    out.ran_stage_one = true;
+    stage_one = runStageOne();
+    timings.stage_one_ms = msSince(t0);
   }
-  if (stages_.relations_and_stage_two) out.stage_two = runRelationsAndStageTwo(&kf, &out.timings);
+  if (stages_.relations_and_stage_two) stage_two = runRelationsAndStageTwo(&kf, &timings);
 
-  const KeyframeResult map = result(t, kf.stamp_s);
-  out.keyframe = map.keyframe;
-  out.stamp_s = map.stamp_s;
-  out.T_map_cam = map.T_map_cam;
-  out.objects = map.objects;
-  out.contacts = map.contacts;
+  KeyframeResult out = result(t, kf.stamp_s);
+  out.removed_ids = std::move(removed);
   out.detection_consistency = detections.score;
-  out.detection_object = detection_object;
+  out.detection_object = std::move(detection_object);
   out.skipped_detections = detections.skipped;
-  out.timings.total_ms = msSince(start);
+  out.stage_one = stage_one;
+  out.stage_two = stage_two;
+  timings.total_ms = msSince(start);
+  out.timings = timings;
   return out;
 }
 
@@ -456,7 +452,6 @@ KeyframeResult SceneEstimator::finish() {
   if (stages_.relations_and_stage_two) stage_two = runRelationsAndStageTwo(nullptr, &timings);
   KeyframeResult out =
       result(static_cast<int>(T_map_cam_.size()) - 1, stamps_.empty() ? 0.0 : stamps_.back());
-  out.ran_stage_one = stages_.stage_one;
   out.stage_one = stage_one;
   out.stage_two = stage_two;
   timings.total_ms = msSince(start);

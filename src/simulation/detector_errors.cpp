@@ -16,14 +16,16 @@ double ar1(double x, double sigma, double length, std::normal_distribution<doubl
 
 }  // namespace
 
-PersistentErrors::PersistentErrors(const PersistentErrorModel& model, std::size_t objects,
-                                   std::size_t phantom_hosts, std::mt19937& rng)
+PersistentErrors::PersistentErrors(const PersistentErrorModel& model,
+                                   std::vector<bool> has_look_alike, std::mt19937& rng)
     : model_(model),
-      bias_t_(objects, Eigen::Vector3d::Zero()),
-      bias_r_(objects, Eigen::Vector3d::Zero()),
-      ray_(objects, 0.0),
-      swap_left_(objects, 0),
-      miss_left_(objects, 0) {
+      has_look_alike_(std::move(has_look_alike)),
+      bias_t_(has_look_alike_.size(), Eigen::Vector3d::Zero()),
+      bias_r_(has_look_alike_.size(), Eigen::Vector3d::Zero()),
+      ray_(has_look_alike_.size(), 0.0),
+      swap_left_(has_look_alike_.size(), 0),
+      miss_left_(has_look_alike_.size(), 0) {
+  const std::size_t objects = has_look_alike_.size();
   std::normal_distribution<double> n(0.0, 1.0);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   // Start in the stationary distribution.
@@ -32,10 +34,9 @@ PersistentErrors::PersistentErrors(const PersistentErrorModel& model, std::size_
     bias_r_[i] = model.bias_rotation_rad * Eigen::Vector3d(n(rng), n(rng), n(rng));
     ray_[i] = model.ray_depth_fraction * n(rng);
   }
-  for (int k = 0; k < model.phantoms && phantom_hosts > 0; ++k) {
+  for (int k = 0; k < model.phantoms && objects > 0; ++k) {
     Phantom p;
-    p.host = static_cast<int>(u(rng) * static_cast<double>(phantom_hosts)) %
-             static_cast<int>(phantom_hosts);
+    p.host = static_cast<int>(u(rng) * static_cast<double>(objects)) % static_cast<int>(objects);
     const double a = 2.0 * M_PI * u(rng);
     p.offset_world = (0.03 + 0.03 * u(rng)) * Eigen::Vector3d(std::cos(a), std::sin(a), 0.0);
     p.yaw_rad = 2.0 * M_PI * u(rng);
@@ -51,7 +52,7 @@ int PersistentErrors::stretch(int lo, int hi, std::mt19937& rng) const {
   return d(rng);
 }
 
-void PersistentErrors::step(const std::vector<bool>& has_look_alike, std::mt19937& rng) {
+void PersistentErrors::step(std::mt19937& rng) {
   std::normal_distribution<double> n(0.0, 1.0);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   const PersistentErrorModel& m = model_;
@@ -62,7 +63,7 @@ void PersistentErrors::step(const std::vector<bool>& has_look_alike, std::mt1993
       bias_r_[i][k] = ar1(bias_r_[i][k], m.bias_rotation_rad, m.bias_correlation_keyframes, n, rng);
     }
     ray_[i] = ar1(ray_[i], m.ray_depth_fraction, m.ray_correlation_keyframes, n, rng);
-    const bool can_swap = i < has_look_alike.size() && has_look_alike[i];
+    const bool can_swap = has_look_alike_[i];
     if (swap_left_[i] > 0) {
       --swap_left_[i];
     } else if (can_swap && u(rng) < m.swap_stretch_rate) {

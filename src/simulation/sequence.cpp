@@ -382,12 +382,13 @@ SequenceFrame SequenceRenderer::render(const FramePose& pose, const DepthNoise& 
 void SequenceRenderer::stepPersistentErrors(const DetectorModel& detector, const ModelSet& models,
                                             std::mt19937& rng) {
   if (!detector.persistence.enabled()) return;
-  const std::size_t n = scene_.objects.size();
-  if (!errors_) errors_ = std::make_unique<PersistentErrors>(detector.persistence, n, n, rng);
-  std::vector<bool> has_look_alike(n);
-  for (std::size_t i = 0; i < n; ++i)
-    has_look_alike[i] = !lookAlikeOf(detector, models, scene_.objects[i].model->name).empty();
-  errors_->step(has_look_alike, rng);
+  if (!errors_) {
+    std::vector<bool> has_look_alike;
+    for (const SceneObject& o : scene_.objects)
+      has_look_alike.push_back(!lookAlikeOf(detector, models, o.model->name).empty());
+    errors_ = std::make_unique<PersistentErrors>(detector.persistence, has_look_alike, rng);
+  }
+  errors_->step(rng);
 }
 
 // What the camera sees: the table, the floor and the objects (instance ids: object index + 1).

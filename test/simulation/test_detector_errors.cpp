@@ -49,11 +49,11 @@ TEST(PersistentErrors, BiasIsCorrelatedNearbyAndNotFarAway) {
   m.bias_correlation_keyframes = 30;
   const std::size_t objects = 300, steps = 400;
   std::mt19937 rng(5);
-  PersistentErrors e(m, objects, 0, rng);
+  PersistentErrors e(m, std::vector<bool>(objects, false), rng);
   std::vector<std::vector<double>> x(steps, std::vector<double>(objects));
   for (std::size_t t = 0; t < steps; ++t) {
     for (std::size_t i = 0; i < objects; ++i) x[t][i] = e.translationBias(i).x();
-    e.step(std::vector<bool>(objects, false), rng);
+    e.step(rng);
   }
   std::vector<double> a, b, c;
   double sq = 0;
@@ -78,7 +78,7 @@ TEST(PersistentErrors, ColourOnlyErrorLiesAlongTheViewingRay) {
   const DetectorModel rgb = DetectorModel::rgbOnly();
   std::mt19937 rng(7);
   const std::size_t objects = 400;
-  PersistentErrors e(rgb.persistence, objects, 0, rng);
+  PersistentErrors e(rgb.persistence, std::vector<bool>(objects, false), rng);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   double along = 0, across = 0, relative = 0;
   for (std::size_t i = 0; i < objects; ++i) {
@@ -106,11 +106,11 @@ TEST(PersistentErrors, StretchesHaveTheirConfiguredLengths) {
   m.phantoms = 3;
   const std::size_t objects = 6, steps = 3000;
   std::mt19937 rng(11);
-  PersistentErrors e(m, objects, objects, rng);
   const std::vector<bool> look_alike{true, true, true, false, false, false};
+  PersistentErrors e(m, look_alike, rng);
   std::vector<std::vector<bool>> swapped(objects), missed(objects), phantom(3);
   for (std::size_t t = 0; t < steps; ++t) {
-    e.step(look_alike, rng);
+    e.step(rng);
     for (std::size_t i = 0; i < objects; ++i) {
       swapped[i].push_back(e.swapped(i));
       missed[i].push_back(e.missed(i));

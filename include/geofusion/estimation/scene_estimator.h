@@ -110,8 +110,7 @@ struct KeyframeResult {
   std::vector<double> detection_consistency;  ///< per input detection (-1: not scored)
   std::vector<int> detection_object;          ///< per input detection: object id, -1 = none
   int skipped_detections = 0;                 ///< unknown class or below min score
-  bool ran_stage_one = false;
-  StageReport stage_one;  ///< a failed stage's result is not used
+  StageReport stage_one;                      ///< a failed stage's result is not used
   StageReport stage_two;
   StageTimings timings;
 };

@@ -61,12 +61,12 @@ class PersistentErrors {
     bool on = false;
   };
 
-  PersistentErrors(const PersistentErrorModel& model, std::size_t objects,
-                   std::size_t phantom_hosts, std::mt19937& rng);
+  /// `has_look_alike[i]`: object i can be swapped (one entry an object); phantoms sit beside them.
+  PersistentErrors(const PersistentErrorModel& model, std::vector<bool> has_look_alike,
+                   std::mt19937& rng);
 
-  /// One keyframe on: the biases move, stretches count down and start. `has_look_alike[i]`: object
-  /// i can be swapped.
-  void step(const std::vector<bool>& has_look_alike, std::mt19937& rng);
+  /// One keyframe on: the biases move, stretches count down and start.
+  void step(std::mt19937& rng);
 
   /// T_cam_obj with object i's bias: rotation and translation bias in the camera frame, then the
   /// error along the viewing ray.
@@ -83,6 +83,7 @@ class PersistentErrors {
   int stretch(int lo, int hi, std::mt19937& rng) const;
 
   PersistentErrorModel model_;
+  std::vector<bool> has_look_alike_;
   std::vector<Eigen::Vector3d> bias_t_, bias_r_;
   std::vector<double> ray_;
   std::vector<int> swap_left_, miss_left_;
