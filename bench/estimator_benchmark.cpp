@@ -4,7 +4,7 @@
 // benchmark tool's.
 //
 //   estimator_benchmark [--models DIR] [--objects 18] [--keyframes 100] [--seed 101]
-//                       [--detector densefusion|posecnn]
+//                       [--detector PRESET]
 //
 // DIR holds the YCB-Video models (default ../shared/data/ycb_video beside the source tree);
 // without them the built-in primitives are used and the output says so.
@@ -63,7 +63,7 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: %s [--models DIR] [--objects N] [--keyframes N] [--seed S] "
-                   "[--detector densefusion|posecnn] [--method NAME] [--eps-res M] [--eps-out M] "
+                   "[--detector PRESET] [--method NAME] [--eps-res M] [--eps-out M] "
                    "[--inlier-centre X] [--outlier-centre X] [--eps-fp X] [--eps-new X]\n",
                    argv[0]);
       return 2;
@@ -81,7 +81,10 @@ int main(int argc, char** argv) {
   }
   SuiteSpec suite;
   suiteByName("bench", &suite);
-  if (detector == "posecnn") suite.detector = DetectorModel::posecnn();
+  if (!DetectorModel::byName(detector, &suite.detector)) {
+    std::fprintf(stderr, "unknown detector preset '%s'\n", detector.c_str());
+    return 2;
+  }
   SceneSpec spec{"benchmark", seed, objects};
   ClutterScene scene;
   std::string report;

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# The benchmark (docs/BENCHMARK.md): generates or reuses a suite (SUITE=bench, or demo), runs
-# FbF, B-SLAM, R-Front and GeoFusion on every scene with the offline runner, evaluates each run
-# against the ground truth (evaluate_run) and writes report.md, summary.json and the figures
-# (bench_report.py, COCO mAP by pycocotools) to results/<suite>/ (or BENCH_OUT).
+# The benchmark (docs/BENCHMARK.md): generates or reuses each suite (SUITE="bench bench_rgb
+# bench_iid" by default, or one of them, or demo), runs FbF, B-SLAM, R-Front and GeoFusion on every
+# scene with the offline runner, evaluates each run against the ground truth (evaluate_run) and
+# writes report.md, summary.json and the figures (bench_report.py, COCO mAP by pycocotools) to
+# results/<suite>/ (or BENCH_OUT/<suite> with several suites, BENCH_OUT with one); with several
+# suites also results/report.md (BENCH_OUT/report.md), a table per suite.
 #   MODELS=DIR     YCB-Video models folder (default $GEOFUSION_YCB_DIR, else ../shared/data/ycb_video)
 #   GUARD=1        exit 1 unless GeoFusion beats FbF on mAP50:95 and precision50 (CI's guard)
 #   METHODS="..."  a subset of: fbf bslam rfront geofusion
@@ -14,7 +16,23 @@ bash "$GEOFUSION_SRC/scripts/python_env.sh"
 set +u
 source "$GEOFUSION_WS/devel/setup.bash"
 set -u
-suite="${SUITE:-bench}"
+read -r -a suites <<< "${SUITE:-bench bench_rgb bench_iid}"
+if [ ${#suites[@]} -gt 1 ]; then  # each suite on its own (this script again), then one report
+  results_root="${BENCH_OUT:-$GEOFUSION_SRC/results}"
+  dirs=()
+  status=0
+  for suite in "${suites[@]}"; do
+    SUITE="$suite" BENCH_OUT="$results_root/$suite" bash "$0" || status=$?
+    [ -f "$results_root/$suite/summary.json" ] && dirs+=("$results_root/$suite")
+  done
+  if [ ${#dirs[@]} -gt 0 ]; then
+    "$GEOFUSION_VENV/bin/python" "$GEOFUSION_SRC/src/tools/bench_report.py" \
+      --combine "${dirs[@]}" --out "$results_root"
+  fi
+  [ $status -eq 0 ] || say "a suite failed (exit $status)"
+  exit $status
+fi
+suite="${suites[0]}"
 data="$GEOFUSION_DATA/$suite"
 out="${BENCH_OUT:-$GEOFUSION_SRC/results/$suite}"
 bin="$GEOFUSION_WS/devel/lib/geofusion"

@@ -151,6 +151,11 @@ void evaluateKeyframe(const GroundTruth& gt, const GroundTruthFrame& f, const Ke
     g.object = i;
     g.visible_fraction = f.visible_fraction[static_cast<std::size_t>(i)];
     g.crowd = g.visible_fraction < config.min_visible_fraction;
+    if (static_cast<int>(f.visible_boxes.size()) == n_objects) {
+      const PixelBox& m = f.visible_boxes[static_cast<std::size_t>(i)];
+      if (m.valid())
+        g.mask_box = Box2d{double(m.x), double(m.y), double(m.x + m.width), double(m.y + m.height)};
+    }
     ev->ground_truth.push_back(g);
     truth_poses.push_back(T);
   }
@@ -176,17 +181,22 @@ void evaluateKeyframe(const GroundTruth& gt, const GroundTruthFrame& f, const Ke
   }
 }
 
-// The estimated map frame aligned to the true one by the trajectories (Umeyama).
+// The estimated map frame aligned to the true one by the trajectories (Umeyama); the residual is
+// the method's ATE. The odometry it was given (the recorded odom -> base chain, the camera mounted
+// as in the truth), aligned the same way at the same stamps, gives the ATE it started from.
 void alignMapFrame(const RunResults& results, const KeyframeMatcher& frames, RunEvaluation* ev) {
-  std::vector<Eigen::Vector3d> est_positions, true_positions;
+  std::vector<Eigen::Vector3d> est_positions, true_positions, odometry_positions;
   for (std::size_t i = 0; i < results.trajectory.size(); ++i) {
     const GroundTruthFrame* f =
         i < results.trajectory_stamps.size() ? frames.at(results.trajectory_stamps[i]) : nullptr;
     if (!f) continue;
     est_positions.push_back(results.trajectory[i].translation());
     true_positions.push_back(f->T_map_optical.translation());
+    odometry_positions.push_back(
+        (f->T_odom_base * f->T_map_base.inverse() * f->T_map_optical).translation());
   }
   ev->T_true_est = alignTrajectories(est_positions, true_positions, &ev->alignment_rmse_m);
+  alignTrajectories(odometry_positions, true_positions, &ev->odometry_ate_rmse_m);
 }
 
 // The final map, aligned, matched to the true objects by ADD-S.
@@ -217,17 +227,21 @@ void evaluateContactGraph(const GroundTruth& gt, const RunResults& results, cons
                           RunEvaluation* ev) {
   const std::vector<ObjectEstimate>& map = results.final_map.objects;
   std::set<ContactKey> true_keys;
+  std::set<std::pair<int, int>> true_pairs, estimated_pairs;
+  auto pairOf = [](const ContactKey& k) { return std::make_pair(std::get<0>(k), std::get<1>(k)); };
   std::set<int> matched_truth(score.match.begin(), score.match.end());
   matched_truth.insert(-1);
   for (const FeatureContact& c : gt.scene.contacts) {
     if (!c.support) continue;
     const ContactKey key = keyOf(c.object_a, c.object_b, shortName(c.type));
+    true_pairs.insert(pairOf(key));
     if (!true_keys.insert(key).second) continue;
     ev->graph_true_contacts.push_back({c.object_a, c.object_b, shortName(c.type), true, true});
     ev->true_contacts_between_matched +=
         matched_truth.count(c.object_a) && matched_truth.count(c.object_b);
   }
   ev->true_contacts = static_cast<int>(true_keys.size());
+  ev->true_contact_pairs = static_cast<int>(true_pairs.size());
   ev->has_contacts = results.method == toString(Method::kGeoFusion);
   if (!ev->has_contacts) return;
   std::set<ContactKey> seen;
@@ -243,6 +257,8 @@ void evaluateContactGraph(const GroundTruth& gt, const RunResults& results, cons
     const ContactKey key =
         matched ? keyOf(a, b, shortName(c.type))
                 : keyOf(-2 - idOf(c.object_a), -2 - idOf(c.object_b), shortName(c.type));
+    if (estimated_pairs.insert(pairOf(key)).second)
+      ev->correct_contact_pairs += matched && true_pairs.count(pairOf(key));
     if (!seen.insert(key).second) continue;
     const bool correct = matched && true_keys.count(key);
     ev->correct_contacts += correct;
@@ -250,6 +266,64 @@ void evaluateContactGraph(const GroundTruth& gt, const RunResults& results, cons
         {idOf(c.object_a), idOf(c.object_b), shortName(c.type), true, correct});
   }
   ev->estimated_contacts = static_cast<int>(seen.size());
+  ev->estimated_contact_pairs = static_cast<int>(estimated_pairs.size());
+}
+
+// Keyframes in which the detector reported each persistent phantom (detection_truth -2 - k) and
+// each object as a look-alike.
+void countDetectorErrors(const GroundTruth& gt, std::vector<int>* phantom_keyframes,
+                         std::vector<int>* swap_keyframes) {
+  phantom_keyframes->assign(gt.phantoms.size(), 0);
+  swap_keyframes->assign(gt.scene.objects.size(), 0);
+  for (const GroundTruthFrame& f : gt.frames) {
+    std::set<int> phantoms(f.detection_truth.begin(), f.detection_truth.end());
+    for (int t : phantoms) {
+      const int k = -2 - t;
+      if (k >= 0 && k < static_cast<int>(phantom_keyframes->size()))
+        ++(*phantom_keyframes)[static_cast<std::size_t>(k)];
+    }
+    for (int i : std::set<int>(f.swapped.begin(), f.swapped.end()))
+      if (i >= 0 && i < static_cast<int>(swap_keyframes->size()))
+        ++(*swap_keyframes)[static_cast<std::size_t>(i)];
+  }
+}
+
+// An unmatched estimate of the final map (aligned) within `radius` of `position` whose class is
+// (or, with `other_class`, is not) `class_name`.
+bool unmatchedEstimateNear(const std::vector<ObjectEstimate>& map, const MapScore& score,
+                           const Eigen::Isometry3d& T_true_est, const Eigen::Vector3d& position,
+                           const std::string& class_name, bool other_class, double radius) {
+  for (std::size_t j = 0; j < map.size(); ++j) {
+    if (score.match[j] >= 0 || (map[j].model->name == class_name) == other_class) continue;
+    if ((T_true_est * map[j].T_map_obj.translation() - position).norm() < radius) return true;
+  }
+  return false;
+}
+
+// The detector's persistent false objects and wrong classes, and which of them the final map
+// keeps: a phantom as an unmatched object of its class at its place, a swap as an unmatched
+// object of another class at the swapped object's place.
+void evaluateDetectorErrors(const GroundTruth& gt, const std::vector<ObjectEstimate>& map,
+                            const MapScore& score, const EvaluationConfig& config,
+                            RunEvaluation* ev) {
+  std::vector<int> phantom_keyframes, swap_keyframes;
+  countDetectorErrors(gt, &phantom_keyframes, &swap_keyframes);
+  for (std::size_t k = 0; k < gt.phantoms.size(); ++k) {
+    if (phantom_keyframes[k] < config.persistent_min_keyframes) continue;
+    ++ev->persistent_phantoms;
+    const PhantomObject& p = gt.phantoms[k];
+    ev->surviving_phantoms +=
+        unmatchedEstimateNear(map, score, ev->T_true_est, p.T_world_obj.translation(), p.class_name,
+                              false, config.phantom_match_m);
+  }
+  for (std::size_t i = 0; i < gt.scene.objects.size(); ++i) {
+    if (swap_keyframes[i] < config.persistent_min_keyframes) continue;
+    ++ev->persistent_swaps;
+    const SceneObject& o = gt.scene.objects[i];
+    ev->surviving_swaps +=
+        unmatchedEstimateNear(map, score, ev->T_true_est, o.T_world_obj.translation(),
+                              o.model->name, true, config.lifecycle_match_m);
+  }
 }
 
 // The table in the estimate's own frame: the method's own support plane when it has one, else the
@@ -371,6 +445,7 @@ void evaluateLifecycle(const GroundTruth& gt, const RunResults& results,
 bool evaluateRun(const GroundTruth& gt, const RunResults& results, const EvaluationConfig& config,
                  RunEvaluation* evaluation, std::string* error) {
   RunEvaluation ev;
+  ev.evaluation_config = config;
   describeRun(gt, results, &ev);
   const KeyframeMatcher frames(gt, config.stamp_tolerance_s);
   AddsEvaluator adds;
@@ -389,6 +464,7 @@ bool evaluateRun(const GroundTruth& gt, const RunResults& results, const Evaluat
   alignMapFrame(results, frames, &ev);
   const MapScore score = evaluateFinalMap(gt, results.final_map.objects, config, &ev);
   evaluateContactGraph(gt, results, score, &ev);
+  evaluateDetectorErrors(gt, results.final_map.objects, score, config, &ev);
   evaluatePlausibility(gt, results, score, config, &ev);
   evaluateLifecycle(gt, results, frames, score, config, &ev);
   *evaluation = std::move(ev);
@@ -455,14 +531,16 @@ bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::s
   j["unmatched_keyframes"] = e.unmatched_keyframes;
   j["annotations"] = json::array();
   for (const GroundTruthBox& g : e.ground_truth) {
-    j["annotations"].push_back({{"id", g.id},
-                                {"image_id", g.image},
-                                {"category_id", g.class_id},
-                                {"bbox", boxJson(g.box)},
-                                {"area", g.box.width() * g.box.height()},
-                                {"iscrowd", g.crowd ? 1 : 0},
-                                {"object", g.object},
-                                {"visible_fraction", g.visible_fraction}});
+    j["annotations"].push_back(
+        {{"id", g.id},
+         {"image_id", g.image},
+         {"category_id", g.class_id},
+         {"bbox", boxJson(g.box)},
+         {"area", g.box.width() * g.box.height()},
+         {"iscrowd", g.crowd ? 1 : 0},
+         {"mask_bbox", g.mask_box.empty() ? json(nullptr) : boxJson(g.mask_box)},
+         {"object", g.object},
+         {"visible_fraction", g.visible_fraction}});
   }
   j["detections"] = json::array();
   for (const DetectionBox& d : e.detections) {
@@ -481,13 +559,20 @@ bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::s
     contacts = {{"true", e.true_contacts},
                 {"estimated", e.estimated_contacts},
                 {"correct", e.correct_contacts},
-                {"true_between_matched", e.true_contacts_between_matched}};
+                {"true_between_matched", e.true_contacts_between_matched},
+                {"true_pairs", e.true_contact_pairs},
+                {"estimated_pairs", e.estimated_contact_pairs},
+                {"correct_pairs", e.correct_contact_pairs}};
   }
   j["final_map"] = {{"objects", e.map_objects},
                     {"matched", e.map_matched},
                     {"true_objects", e.true_objects},
                     {"adds_m", e.map_adds_m},
                     {"alignment_rmse_m", e.alignment_rmse_m},
+                    {"persistent_phantoms", e.persistent_phantoms},
+                    {"surviving_phantoms", e.surviving_phantoms},
+                    {"persistent_swaps", e.persistent_swaps},
+                    {"surviving_swaps", e.surviving_swaps},
                     {"contacts", contacts},
                     {"penetration_mm", scaled(e.penetration_m, 1000.0)},
                     {"gap_mm", scaled(e.gap_m, 1000.0)}};
@@ -510,6 +595,20 @@ bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::s
     lifecycle = {{"objects", objects}, {"lost", lost}, {"flip_flops", returns}};
   }
   j["lifecycle"] = lifecycle;
+  j["trajectory"] = {{"ate_rmse_m", e.alignment_rmse_m},
+                     {"odometry_ate_rmse_m", e.odometry_ate_rmse_m}};
+  const EvaluationConfig& c = e.evaluation_config;
+  j["evaluation_config"] = {{"min_visible_fraction", c.min_visible_fraction},
+                            {"match_max_adds_m", c.match_max_adds_m},
+                            {"touch_distance_m", c.touch_distance_m},
+                            {"adds_min_iou", c.adds_min_iou},
+                            {"stamp_tolerance_s", c.stamp_tolerance_s},
+                            {"lifecycle_match_m", c.lifecycle_match_m},
+                            {"well_seen_min_keyframes", c.well_seen_min_keyframes},
+                            {"well_seen_min_visible", c.well_seen_min_visible},
+                            {"lost_absence_keyframes", c.lost_absence_keyframes},
+                            {"persistent_min_keyframes", c.persistent_min_keyframes},
+                            {"phantom_match_m", c.phantom_match_m}};
   json timings = json::object();
   auto series = [&](const char* name, double StageTimings::*field) {
     std::vector<double> v;
@@ -584,12 +683,21 @@ std::string summarize(const RunEvaluation& e) {
                 e.map_objects, e.map_matched, e.true_objects, e.map_objects - e.map_matched,
                 1000 * mean(e.map_adds_m));
   s << line;
+  std::snprintf(line, sizeof(line),
+                "  camera trajectory (ATE RMSE): %.1f mm; the odometry it was given: %.1f mm\n",
+                1000 * e.alignment_rmse_m, 1000 * e.odometry_ate_rmse_m);
+  s << line;
+  std::snprintf(line, sizeof(line),
+                "  detector's persistent errors in the final map: %d of %d phantoms, %d of %d "
+                "swapped classes\n",
+                e.surviving_phantoms, e.persistent_phantoms, e.surviving_swaps, e.persistent_swaps);
+  s << line;
   if (e.has_contacts) {
     std::snprintf(line, sizeof(line),
-                  "  support contacts: %d found, %d of them true; %d true (%d between found "
-                  "objects and the table)\n",
-                  e.estimated_contacts, e.correct_contacts, e.true_contacts,
-                  e.true_contacts_between_matched);
+                  "  support contacts: %d found, %d of them true (%d of %d pairs true whatever "
+                  "the type); %d true (%d between found objects and the table)\n",
+                  e.estimated_contacts, e.correct_contacts, e.correct_contact_pairs,
+                  e.estimated_contact_pairs, e.true_contacts, e.true_contacts_between_matched);
     s << line;
   }
   std::snprintf(line, sizeof(line),

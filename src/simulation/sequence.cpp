@@ -448,6 +448,7 @@ std::vector<PixelBox> SequenceRenderer::measureVisibility(const std::vector<Rend
     f.visible_fraction[i] =
         own > 0 ? std::min(1.0, static_cast<double>(f.visible_pixels[i]) / own) : 0.0;
   }
+  f.visible_boxes = boxes;
   return boxes;
 }
 
@@ -511,6 +512,7 @@ void SequenceRenderer::detectObjects(const Eigen::Isometry3d& T_cam_map,
       if (!other.empty()) {
         d.class_name = other;
         d.class_id = models.find(other)->id;
+        f.swapped.push_back(static_cast<int>(i));
       }
     }
     const double c = detector.persistence.score_correctness;
@@ -527,29 +529,50 @@ void SequenceRenderer::detectObjects(const Eigen::Isometry3d& T_cam_map,
 
 // Phantoms (persistent false objects): each one that is on, beside its visible host, reported in
 // `phantom_presence` of the keyframes, at the same place in the world every time.
+PhantomObject SequenceRenderer::phantomOf(const PersistentErrors::Phantom& p,
+                                          const ModelSet& models) const {
+  PhantomObject o;
+  o.host = p.host;
+  const auto& m = models.models()[static_cast<std::size_t>(p.class_pick) % models.size()];
+  o.class_name = m->name;
+  o.T_world_obj = scene_.objects[static_cast<std::size_t>(p.host)].T_world_obj;
+  o.T_world_obj.translation() += p.offset_world;
+  o.T_world_obj.linear() =
+      Eigen::AngleAxisd(p.yaw_rad, Eigen::Vector3d::UnitZ()) * o.T_world_obj.linear();
+  return o;
+}
+
+std::vector<PhantomObject> SequenceRenderer::phantoms(const ModelSet& models) const {
+  std::vector<PhantomObject> out;
+  if (!errors_ || models.size() == 0) return out;
+  for (const PersistentErrors::Phantom& p : errors_->phantoms())
+    out.push_back(phantomOf(p, models));
+  return out;
+}
+
 void SequenceRenderer::addPhantoms(const Eigen::Isometry3d& T_cam_map,
                                    const std::vector<PixelBox>& boxes,
                                    const DetectorModel& detector, const ModelSet& models,
                                    Draws* draws, SequenceFrame* frame) const {
   if (!errors_ || models.size() == 0) return;
-  for (const PersistentErrors::Phantom& p : errors_->phantoms()) {
+  const std::vector<PersistentErrors::Phantom>& all = errors_->phantoms();
+  for (std::size_t k = 0; k < all.size(); ++k) {
+    const PersistentErrors::Phantom& p = all[k];
     const std::size_t host = static_cast<std::size_t>(p.host);
     if (!p.on || frame->visible_pixels[host] < detector.min_visible_pixels) continue;
     if (draws->u() >= detector.persistence.phantom_presence) continue;
-    const auto& m = models.models()[static_cast<std::size_t>(p.class_pick) % models.size()];
-    Eigen::Isometry3d T_world = scene_.objects[host].T_world_obj;
-    T_world.translation() += p.offset_world;
-    T_world.linear() = Eigen::AngleAxisd(p.yaw_rad, Eigen::Vector3d::UnitZ()) * T_world.linear();
-    const Eigen::Isometry3d T = T_cam_map * T_world;
+    const PhantomObject phantom = phantomOf(p, models);
+    const ObjectModel& m = *models.find(phantom.class_name);
+    const Eigen::Isometry3d T = T_cam_map * phantom.T_world_obj;
     RawDetection d;
-    d.class_name = m->name;
-    d.class_id = m->id;
+    d.class_name = m.name;
+    d.class_id = m.id;
     d.score = std::clamp(0.75 + 0.1 * draws->g(), 0.05, 1.0);  // as confident as a true one
     d.position_cam = T.translation();
     d.orientation_cam = Eigen::Quaterniond(T.linear());
     d.box = boxes[host];
     frame->detections.push_back(d);
-    frame->detection_truth.push_back(-1);
+    frame->detection_truth.push_back(-2 - static_cast<int>(k));
   }
 }
 

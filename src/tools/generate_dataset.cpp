@@ -3,7 +3,8 @@
 // rosbag with the topics of a real Fetch recording and a ground-truth YAML beside it. Prints the
 // calibration of the noisy inputs (detections' ADD-S per class, odometry drift, depth noise).
 //
-//   generate_dataset --suite demo|bench|bench_rgb|vo|vo_fast [--out-dir DIR] [--models DIR]
+//   generate_dataset --suite demo|bench|bench_rgb|bench_iid|vo|vo_fast [--out-dir DIR] [--models
+//   DIR]
 //       [--model-set YAML] [--scenes bench_01,...] [--keyframes N] [--image-every N]
 //       [--detector densefusion|posecnn|densefusion_persistent|rgb]
 //       [--depth-encoding 16UC1|32FC1] [--no-compression] [--previews N] [--force]
@@ -42,7 +43,8 @@ struct Options {
 
 void usage() {
   std::cerr
-      << "usage: generate_dataset --suite demo|bench|bench_rgb|vo|vo_fast [--out-dir DIR]\n"
+      << "usage: generate_dataset --suite demo|bench|bench_rgb|bench_iid|vo|vo_fast [--out-dir "
+         "DIR]\n"
          "         [--models DIR] [--model-set YAML] [--scenes NAME,NAME] [--keyframes N]\n"
          "         [--image-every N] [--detector densefusion|posecnn|densefusion_persistent|rgb]\n"
          "         [--depth-encoding 16UC1|32FC1]\n"
@@ -51,8 +53,9 @@ void usage() {
          "  --models       YCB-Video models folder (bench); default $GEOFUSION_YCB_DIR, else\n"
          "                 ../shared/data/ycb_video beside the package source\n"
          "  --image-every  images and detections every Nth 30 Hz frame (suite default 6)\n"
-         "  --detector     detector preset (default the suite's: rgb for bench_rgb, else\n"
-         "                 densefusion; docs/dataset.md)\n"
+         "  --detector     detector preset (default the suite's: densefusion_persistent for "
+         "bench,\n"
+         "                 rgb for bench_rgb, densefusion for the others; docs/dataset.md)\n"
          "  --previews     keyframes per scene written as PNG into <out-dir>/previews\n"
          "  --force        regenerate scenes whose cached files match the request\n";
 }
@@ -291,7 +294,9 @@ int main(int argc, char** argv) {
         calibration.add(scene, pose.T_map_optical, f);
         g.visible_fraction = f.visible_fraction;
         g.visible_pixels = f.visible_pixels;
+        g.visible_boxes = f.visible_boxes;
         g.detection_truth = f.detection_truth;
+        g.swapped = f.swapped;
         detections += static_cast<int>(f.detections.size());
         if (keyframe % preview_every == 0 && keyframe / preview_every < opt.previews) {
           char name[64];
@@ -305,6 +310,7 @@ int main(int argc, char** argv) {
       gt.frames.push_back(std::move(g));
     }
     writer.close();
+    gt.phantoms = renderer.phantoms(models);
     if (!writeGroundTruth(gt_path, gt, &error)) {
       std::cerr << "generate_dataset: " << error << "\n";
       return 1;

@@ -261,12 +261,92 @@ TEST_F(RunEvaluationTest, ContactsOfTheWrongTypeOrObjectAreWrong) {
   EXPECT_EQ(ev.estimated_contacts, 3);
   EXPECT_EQ(ev.correct_contacts, 1);
   EXPECT_EQ(ev.true_contacts, 2);
+  // Per object pair whatever the type: the box on the table is right, the pair of objects wrong.
+  EXPECT_EQ(ev.estimated_contact_pairs, 3);
+  EXPECT_EQ(ev.correct_contact_pairs, 2);
+  EXPECT_EQ(ev.true_contact_pairs, 2);
   int correct = 0;
   for (const GraphContact& c : ev.graph_estimated_contacts) correct += c.correct;
   EXPECT_EQ(correct, 1);
   // A method without contact inference has no contact figures at all.
   results.method = "R-Front";
   EXPECT_FALSE(evaluate().has_contacts);
+}
+
+TEST_F(RunEvaluationTest, MaskBoxesAreTheBoxesOfTheVisiblePixels) {
+  for (GroundTruthFrame& f : gt.frames) f.visible_boxes = {PixelBox{10, 20, 30, 40}, PixelBox{}};
+  RunEvaluation ev = evaluate();
+  ASSERT_EQ(ev.ground_truth.size(), 6u);
+  for (const GroundTruthBox& g : ev.ground_truth) {
+    if (g.object == 1) {
+      EXPECT_TRUE(g.mask_box.empty());  // no visible pixel recorded
+      continue;
+    }
+    EXPECT_DOUBLE_EQ(g.mask_box.x0, 10.0);
+    EXPECT_DOUBLE_EQ(g.mask_box.y0, 20.0);
+    EXPECT_DOUBLE_EQ(g.mask_box.x1, 40.0);
+    EXPECT_DOUBLE_EQ(g.mask_box.y1, 60.0);
+    EXPECT_FALSE(g.box.empty());  // the projected-model box is there beside it
+  }
+  // Ground truth without recorded masks (older files): no mask boxes.
+  for (GroundTruthFrame& f : gt.frames) f.visible_boxes.clear();
+  ev = evaluate();
+  for (const GroundTruthBox& g : ev.ground_truth) EXPECT_TRUE(g.mask_box.empty());
+}
+
+// A phantom reported in every keyframe and a brick reported as a cracker box in every keyframe:
+// each survives when the final map keeps an unmatched object that it explains.
+TEST_F(RunEvaluationTest, PersistentPhantomsAndSwapsInTheFinalMapAreCounted) {
+  PhantomObject phantom;
+  phantom.host = 0;
+  phantom.class_name = models[1]->name;  // a brick 6 cm beside the cracker box
+  phantom.T_world_obj = gt.scene.objects[0].T_world_obj * Eigen::Translation3d(0.0, 0.06, 0.0);
+  gt.phantoms.push_back(phantom);
+  for (GroundTruthFrame& f : gt.frames) {
+    f.detection_truth = {0, 1, -2};
+    f.swapped = {1};
+  }
+  EvaluationConfig config;
+  config.persistent_min_keyframes = 3;
+  RunEvaluation ev;
+  std::string error;
+  ASSERT_TRUE(evaluateRun(gt, results, config, &ev, &error)) << error;
+  EXPECT_EQ(ev.persistent_phantoms, 1);
+  EXPECT_EQ(ev.surviving_phantoms, 0);
+  EXPECT_EQ(ev.persistent_swaps, 1);
+  EXPECT_EQ(ev.surviving_swaps, 0);
+  ObjectEstimate ghost = results.final_map.objects[1];  // the phantom, as a brick
+  ghost.id = 98;
+  ghost.T_map_obj = phantom.T_world_obj;
+  ObjectEstimate swapped = results.final_map.objects[0];  // a cracker box where the brick is
+  swapped.id = 99;
+  swapped.T_map_obj.translation() = gt.scene.objects[1].T_world_obj.translation();
+  results.final_map.objects.push_back(ghost);
+  results.final_map.objects.push_back(swapped);
+  ASSERT_TRUE(evaluateRun(gt, results, config, &ev, &error)) << error;
+  EXPECT_EQ(ev.map_matched, 2);
+  EXPECT_EQ(ev.surviving_phantoms, 1);
+  EXPECT_EQ(ev.surviving_swaps, 1);
+  // Reported in fewer keyframes than the threshold: not persistent, not counted.
+  config.persistent_min_keyframes = 4;
+  ASSERT_TRUE(evaluateRun(gt, results, config, &ev, &error)) << error;
+  EXPECT_EQ(ev.persistent_phantoms, 0);
+  EXPECT_EQ(ev.surviving_phantoms, 0);
+  EXPECT_EQ(ev.persistent_swaps, 0);
+}
+
+// The odometry's ATE comes from the recorded odom -> base chain: zero when it is the truth, the
+// residual of its own alignment when it bends; the method's own ATE is separate.
+TEST_F(RunEvaluationTest, TheOdometrysTrajectoryErrorIsMeasuredBesideTheMethods) {
+  EXPECT_LT(evaluate().odometry_ate_rmse_m, 1e-9);
+  for (std::size_t k = 0; k < gt.frames.size(); ++k) {
+    const double bend = 0.01 * static_cast<double>(k * k);  // 0, 1, 4 cm sideways
+    gt.frames[k].T_odom_base = translation(0.0, bend, 0.0) * gt.frames[k].T_map_base;
+  }
+  const RunEvaluation ev = evaluate();
+  EXPECT_LT(ev.alignment_rmse_m, 1e-6);  // the method's cameras are the truth
+  EXPECT_GT(ev.odometry_ate_rmse_m, 0.002);
+  EXPECT_LT(ev.odometry_ate_rmse_m, 0.04);
 }
 
 TEST_F(RunEvaluationTest, SunkAndFloatingObjectsGiveTheirDepthAndGap) {

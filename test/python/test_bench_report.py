@@ -233,6 +233,62 @@ class OtherMetricsTest(unittest.TestCase):
         self.assertEqual(m['final_true_objects'], 8)
 
 
+class PersistentErrorMetricsTest(unittest.TestCase):
+
+    def test_mask_boxes_score_against_the_visible_pixels(self):
+        # Masks a quarter of each projected box (the objects' lower-right parts hidden): the
+        # projected-model boxes stay perfect, the same detections overlap the mask boxes at IoU
+        # 0.25 only, below every COCO threshold.
+        ev = make_eval()
+        for a in ev['annotations']:
+            x, y, w, h = a['bbox']
+            a['mask_bbox'] = [x, y, w / 2, h / 2]
+        m = bench_report.method_summary([ev])
+        self.assertAlmostEqual(m['map50_95'], 100.0, places=6)
+        self.assertAlmostEqual(m['map50_95_mask'], 0.0, places=6)
+        # Files without mask boxes: not measured, nothing else changes.
+        m = bench_report.method_summary([make_eval()])
+        self.assertIsNone(m['map50_95_mask'])
+        self.assertAlmostEqual(m['map50_95'], 100.0, places=6)
+
+    def test_contacts_per_pair_and_type(self):
+        a = make_eval(contacts={'true': 4, 'estimated': 4, 'correct': 2, 'true_pairs': 4,
+                                'estimated_pairs': 4, 'correct_pairs': 3})
+        c = bench_report.contact_metrics([a])
+        self.assertAlmostEqual(c['contact_precision'], 0.5)
+        self.assertAlmostEqual(c['contact_pair_precision'], 0.75)
+        self.assertAlmostEqual(c['contact_pair_f1'], 0.75)
+
+    def test_persistent_suite_targets(self):
+        def with_errors(method, lost, phantoms, auc_adds):
+            ev = make_eval(method, detect=lambda i, o: (BOXES[o], 0.9, auc_adds))
+            ev['final_map'].update(persistent_phantoms=2, surviving_phantoms=phantoms,
+                                   persistent_swaps=1, surviving_swaps=0)
+            ev['trajectory'] = {'ate_rmse_m': 0.004, 'odometry_ate_rmse_m': 0.006}
+            ev['lifecycle'] = {'lost': lost, 'flip_flops': 0, 'objects': [{}] * 4}
+            return ev
+        # FbF at 5 cm ADD-S (AUC 50), GeoFusion at 1 cm (AUC 90): 40 points above.
+        evals = [with_errors('FbF', 0, 2, 0.05), with_errors('GeoFusion', 1, 1, 0.01)]
+        summary = bench_report.summarize(evals, 'bench', 'x')
+        targets = {t['target']: t for t in summary['targets']}
+        auc = targets['per-keyframe ADD-S AUC: GeoFusion >= FbF + 10 points']
+        self.assertTrue(auc['met'])
+        self.assertEqual(auc['measured'], '90.0 vs 50.0')
+        lost = targets['lost objects: GeoFusion none']
+        self.assertFalse(lost['met'])
+        self.assertEqual(lost['measured'], '1 of 4')
+        kept = targets['persistent phantoms and swapped classes in the final maps: GeoFusion none']
+        self.assertEqual(kept['measured'], '1 of 2 phantoms, 0 of 1 swaps')
+        self.assertFalse(kept['met'])
+        self.assertNotIn('mAP50:95: GeoFusion >= 1.6 x FbF', targets)
+        self.assertAlmostEqual(summary['GeoFusion']['ate_mm'], 4.0)
+        self.assertAlmostEqual(summary['GeoFusion']['odometry_ate_mm'], 6.0)
+        # The independent-error suite has the paper's targets instead.
+        targets = {t['target'] for t in bench_report.summarize(evals, 'bench_iid', 'x')['targets']}
+        self.assertIn('mAP50:95: GeoFusion >= 1.6 x FbF', targets)
+        self.assertNotIn('lost objects: GeoFusion none', targets)
+
+
 def write_evals(directory, evals):
     for ev in evals:
         os.makedirs(os.path.join(directory, ev['scene']), exist_ok=True)
@@ -298,7 +354,7 @@ class MainTest(unittest.TestCase):
                 make_eval('GeoFusion', scene, contacts={'true': 3, 'estimated': 3,
                                                         'correct': 3})]
         write_evals(self.eval_dir, evals)
-        code = run_main(['--eval-dir', self.eval_dir, '--out', self.out, '--suite', 'bench',
+        code = run_main(['--eval-dir', self.eval_dir, '--out', self.out, '--suite', 'bench_iid',
                          '--commit', 'abc1234', '--plot-scene', 's2', '--guard'])
         self.assertEqual(code, 0)
         for name in ('report.md', 'summary.json', 'adds_curve.png', 'timing_s2.png',
@@ -307,7 +363,7 @@ class MainTest(unittest.TestCase):
         with open(os.path.join(self.out, 'summary.json')) as f:
             text = f.read()
         summary = json.loads(text, parse_constant=reject_constant)
-        self.assertEqual((summary['suite'], summary['commit']), ('bench', 'abc1234'))
+        self.assertEqual((summary['suite'], summary['commit']), ('bench_iid', 'abc1234'))
         for key in ('date', 'machine', 'methods', 'scenes'):
             self.assertIn(key, summary)
         self.assertEqual(list(summary['methods']), ['FbF', 'B-SLAM', 'R-Front', 'GeoFusion'])
@@ -348,6 +404,20 @@ class MainTest(unittest.TestCase):
         ahead = targets['mAP50:95: GeoFusion ahead of every other method']
         self.assertFalse(ahead['met'])  # R-Front is as good (a tie)
         self.assertIn('missed by 0.0', ahead['status'])
+
+        # One report over two suites' folders: a section and the targets per suite.
+        other = os.path.join(self.tmp.name, 'report2')
+        self.assertEqual(run_main(['--eval-dir', self.eval_dir, '--out', other, '--suite',
+                                   'bench', '--commit', 'abc1234']), 0)
+        combined = os.path.join(self.tmp.name, 'all')
+        self.assertEqual(run_main(['--combine', self.out, other, '--out', combined]), 0)
+        with open(os.path.join(combined, 'report.md')) as f:
+            text = f.read()
+        for piece in ('## bench_iid', '## bench', '../report/report.md', 'lost objects',
+                      'GeoFusion >= 1.6 x FbF', '](../report2/adds_curve.png)'):
+            self.assertIn(piece, text)
+        self.assertEqual(run_main(['--combine', os.path.join(self.tmp.name, 'nowhere'),
+                                   '--out', combined]), 2)
 
 
 if __name__ == '__main__':

@@ -75,7 +75,9 @@ class GroundTruthTest : public ::testing::Test {
         frame_ = renderer.render(poses_[k], suite_.depth, suite_.detector, models_, rng);
         f.visible_fraction = frame_.visible_fraction;
         f.visible_pixels = frame_.visible_pixels;
+        f.visible_boxes = frame_.visible_boxes;
         f.detection_truth = frame_.detection_truth;
+        f.swapped = frame_.swapped;
       }
       gt_.frames.push_back(f);
     }
@@ -89,6 +91,17 @@ class GroundTruthTest : public ::testing::Test {
 
 TEST_F(GroundTruthTest, RoundTripKeepsEverything) {
   ASSERT_FALSE(gt_.scene.contacts.empty());
+  // A persistent phantom beside object 1, reported in the first keyframe, which also reports
+  // object 0 as a look-alike.
+  PhantomObject phantom;
+  phantom.host = 1;
+  phantom.class_name = gt_.scene.objects[0].model->name;
+  phantom.T_world_obj = gt_.scene.objects[1].T_world_obj * Eigen::Translation3d(0.03, 0.0, 0.0);
+  gt_.phantoms.push_back(phantom);
+  GroundTruthFrame& first = gt_.frames.front();
+  ASSERT_TRUE(first.keyframe);
+  first.detection_truth.push_back(-2);
+  first.swapped.push_back(0);
   const std::string path = tempPath("gt.yaml");
   std::string error;
   ASSERT_TRUE(writeGroundTruth(path, gt_, &error)) << error;
@@ -116,6 +129,10 @@ TEST_F(GroundTruthTest, RoundTripKeepsEverything) {
     EXPECT_EQ(a.feature_b.index, b.feature_b.index);
     EXPECT_EQ(a.support, b.support);
   }
+  ASSERT_EQ(back.phantoms.size(), 1u);
+  EXPECT_EQ(back.phantoms[0].host, 1);
+  EXPECT_EQ(back.phantoms[0].class_name, phantom.class_name);
+  EXPECT_TRUE(back.phantoms[0].T_world_obj.isApprox(phantom.T_world_obj, 1e-7));
   ASSERT_EQ(back.frames.size(), gt_.frames.size());
   int keyframes = 0;
   for (std::size_t k = 0; k < back.frames.size(); ++k) {
@@ -131,6 +148,16 @@ TEST_F(GroundTruthTest, RoundTripKeepsEverything) {
     ++keyframes;
     EXPECT_EQ(a.visible_pixels, b.visible_pixels);
     EXPECT_EQ(a.detection_truth, b.detection_truth);
+    EXPECT_EQ(a.swapped, b.swapped);
+    ASSERT_EQ(a.visible_boxes.size(), b.visible_boxes.size());
+    for (std::size_t i = 0; i < a.visible_boxes.size(); ++i) {
+      EXPECT_EQ(a.visible_boxes[i].x, b.visible_boxes[i].x);
+      EXPECT_EQ(a.visible_boxes[i].y, b.visible_boxes[i].y);
+      EXPECT_EQ(a.visible_boxes[i].width, b.visible_boxes[i].width);
+      EXPECT_EQ(a.visible_boxes[i].height, b.visible_boxes[i].height);
+      // The box of an object's visible pixels exactly when it has some.
+      EXPECT_EQ(a.visible_boxes[i].valid(), a.visible_pixels[i] > 0);
+    }
     for (std::size_t i = 0; i < a.visible_fraction.size(); ++i) {
       EXPECT_NEAR(a.visible_fraction[i], b.visible_fraction[i], 0.0006);
     }

@@ -58,6 +58,12 @@ struct EvaluationConfig {
   /// ... and lost when well seen yet not in the final map, or out of the map for more than this
   /// many keyframes after it was first mapped.
   int lost_absence_keyframes = 10;
+  /// A phantom or a class swap of the detector is persistent when reported in at least this many
+  /// keyframes; it survives when the final map has an object it explains: an unmatched estimate
+  /// of the phantom's class within phantom_match_m of it, or an unmatched estimate of another
+  /// class within lifecycle_match_m of the swapped object.
+  int persistent_min_keyframes = 5;
+  double phantom_match_m = 0.03;
 };
 
 /// A true object's life in the online map over a run.
@@ -77,6 +83,7 @@ struct GroundTruthBox {
   int image = 0;  ///< keyframe index
   int class_id = 0;
   Box2d box;
+  Box2d mask_box;      ///< box of its visible pixels (instance mask); empty when not recorded
   bool crowd = false;  ///< less than min_visible_fraction visible: ignored
   int object = -1;     ///< index of the scene object
   double visible_fraction = 0.0;
@@ -111,6 +118,7 @@ struct GraphContact {
 struct RunEvaluation {
   std::string scene, method;
   std::string config_yaml;  ///< the configuration the run was made with (from the results)
+  EvaluationConfig evaluation_config;  ///< the protocol's own settings
   int image_width = 0, image_height = 0;
   std::vector<std::pair<int, std::string>> categories;  ///< (class id, name) of the model set
   std::vector<std::pair<int, double>> images;           ///< (keyframe index, stamp)
@@ -123,9 +131,18 @@ struct RunEvaluation {
   double alignment_rmse_m = 0.0;
   int map_objects = 0, map_matched = 0, true_objects = 0;
   std::vector<double> map_adds_m;  ///< of each matched object
+  /// The camera trajectory against the truth after the alignment (ATE RMSE; alignment_rmse_m),
+  /// and that of the odometry the method was given, aligned the same way at the same stamps.
+  double odometry_ate_rmse_m = 0.0;
+  /// The detector's persistent false objects and wrong classes, and how many are in the final
+  /// map (EvaluationConfig::persistent_min_keyframes).
+  int persistent_phantoms = 0, surviving_phantoms = 0;
+  int persistent_swaps = 0, surviving_swaps = 0;
   /// Support contacts of the map against the true support contacts, as (object pair, type).
   bool has_contacts = false;  ///< false: the method infers none (FbF, B-SLAM, R-Front)
   int true_contacts = 0, estimated_contacts = 0, correct_contacts = 0;
+  /// The same, per object pair whatever the contact type.
+  int true_contact_pairs = 0, estimated_contact_pairs = 0, correct_contact_pairs = 0;
   int true_contacts_between_matched = 0;  ///< true contacts among matched objects and the table
   std::vector<double> penetration_m;      ///< per touching or intersecting pair (object or table)
   std::vector<double> gap_m;              ///< per true support of a matched object

@@ -44,7 +44,7 @@ struct SuiteSpec {
 
 /// Bumped whenever the generator's output for the same request changes (cached scenes made by
 /// another version are remade).
-constexpr int kGeneratorVersion = 2;
+constexpr int kGeneratorVersion = 3;
 
 /// Every setting of a suite that shapes its data, one line (the cache key of generated scenes).
 std::string describeSuite(const SuiteSpec& suite);
@@ -72,7 +72,10 @@ struct GroundTruthFrame {
   Eigen::Isometry3d T_map_optical = Eigen::Isometry3d::Identity();  ///< camera
   std::vector<double> visible_fraction;                             ///< keyframes, per object
   std::vector<int> visible_pixels;                                  ///< keyframes, per object
-  std::vector<int> detection_truth;  ///< keyframes, per detection: object index, -1 = false
+  std::vector<PixelBox> visible_boxes;  ///< keyframes, per object: box of its visible pixels
+  /// Keyframes, per detection: object index; -1 a one-off false positive, -2 - k phantom k.
+  std::vector<int> detection_truth;
+  std::vector<int> swapped;  ///< keyframes: objects reported as a look-alike class
 };
 
 struct GroundTruth {
@@ -85,7 +88,8 @@ struct GroundTruth {
   PinholeIntrinsics intrinsics;
   std::string map_frame = kMapFrame, odom_frame = kOdomFrame, base_frame = kBaseFrame,
               camera_link_frame = kCameraLinkFrame, camera_frame = kOpticalFrame;
-  ClutterScene scene;  ///< table, objects (map frame), contact graph
+  ClutterScene scene;                   ///< table, objects (map frame), contact graph
+  std::vector<PhantomObject> phantoms;  ///< the detector's persistent false objects
   std::vector<GroundTruthFrame> frames;
 };
 

@@ -138,8 +138,18 @@ struct SequenceFrame {
   std::vector<float> clean_depth;        ///< before noise
   std::vector<double> visible_fraction;  ///< per object: visible / unoccluded pixels
   std::vector<int> visible_pixels;
+  std::vector<PixelBox> visible_boxes;  ///< per object: box of its visible pixels (empty: none)
   std::vector<RawDetection> detections;
-  std::vector<int> detection_truth;  ///< per detection: object index, -1 = false positive
+  /// Per detection: object index; -1 a one-off false positive; -2 - k the persistent phantom k.
+  std::vector<int> detection_truth;
+  std::vector<int> swapped;  ///< objects reported with a look-alike's class in this frame
+};
+
+/// A persistent phantom of a sequence: a false object at a fixed place in the world.
+struct PhantomObject {
+  int host = 0;            ///< the real object it sits beside
+  std::string class_name;  ///< the class it is reported as
+  Eigen::Isometry3d T_world_obj = Eigen::Isometry3d::Identity();
 };
 
 /// Writes deterministic procedural textures for the table (wood-like grain) and the floor
@@ -163,6 +173,10 @@ class SequenceRenderer {
   SequenceFrame render(const FramePose& pose, const DepthNoise& depth_noise,
                        const DetectorModel& detector, const ModelSet& models, std::mt19937& rng);
 
+  /// The sequence's persistent phantoms (none before the first frame, or for a detector without
+  /// them); detection_truth -2 - k refers to entry k.
+  std::vector<PhantomObject> phantoms(const ModelSet& models) const;
+
  private:
   struct Draws;
   std::vector<RenderItem> sceneItems(const Eigen::Isometry3d& T_cam_map) const;
@@ -173,6 +187,7 @@ class SequenceRenderer {
   void detectObjects(const Eigen::Isometry3d& T_cam_map, const std::vector<PixelBox>& boxes,
                      const DetectorModel& detector, const ModelSet& models, Draws* draws,
                      SequenceFrame* frame) const;
+  PhantomObject phantomOf(const PersistentErrors::Phantom& p, const ModelSet& models) const;
   void addPhantoms(const Eigen::Isometry3d& T_cam_map, const std::vector<PixelBox>& boxes,
                    const DetectorModel& detector, const ModelSet& models, Draws* draws,
                    SequenceFrame* frame) const;
