@@ -133,8 +133,8 @@ int main(int argc, char** argv) {
               "objects", "true", "false", "ADD-S mm", "<1cm %", "<2cm %",
               "consistency  association  stage I  relations  stage II  total");
   auto shared = std::make_shared<OffscreenRenderer>();
-  for (Method method : {Method::kFrameByFrame, Method::kBaselineSlam, Method::kRobustFrontEnd,
-                        Method::kGeoFusion}) {
+  for (Method method : {Method::kFrameByFrame, Method::kFrameByFrameRefined, Method::kBaselineSlam,
+                        Method::kRobustFrontEnd, Method::kGeoFusion}) {
     Method wanted;
     if (!only.empty() && parseMethod(only, &wanted) && wanted != method) continue;
     EstimatorConfig config;
@@ -146,11 +146,11 @@ int main(int argc, char** argv) {
     std::vector<std::vector<double>> object_consistency(scene.objects.size());
     for (std::size_t k = 0; k < frames.size(); ++k) {
       const KeyframeResult r = estimator.addKeyframe(makeKeyframe(poses[k], frames[k], K));
-      for (std::size_t d = 0;
-           d < r.detection_consistency.size() && d < frames[k].detection_truth.size(); ++d) {
+      for (std::size_t d = 0; d < r.detections.size() && d < frames[k].detection_truth.size();
+           ++d) {
         const int t = frames[k].detection_truth[d];
         if (t >= 0)
-          object_consistency[static_cast<std::size_t>(t)].push_back(r.detection_consistency[d]);
+          object_consistency[static_cast<std::size_t>(t)].push_back(r.detections[d].consistency);
       }
       t_cons.push_back(r.timings.consistency_ms);
       t_assoc.push_back(r.timings.association_ms);
@@ -167,7 +167,7 @@ int main(int argc, char** argv) {
                     percentile(*v, 1.0));
       times += buf;
     }
-    if (method == Method::kFrameByFrame) {
+    if (stagesOf(method).map_is_keyframe_detections) {
       std::printf("%-10s %7s %5s %5s %9s %7s %7s | %s\n", toString(method), "-", "-", "-", "-", "-",
                   "-", times.c_str());
       continue;

@@ -7,7 +7,7 @@
 # suites also results/report.md (BENCH_OUT/report.md), a table per suite.
 #   MODELS=DIR     YCB-Video models folder (default $GEOFUSION_YCB_DIR, else ../shared/data/ycb_video)
 #   GUARD=1        exit 1 unless GeoFusion beats FbF on mAP50:95 and precision50 (CI's guard)
-#   METHODS="..."  a subset of: fbf bslam rfront geofusion
+#   METHODS="..."  a subset of: fbf fbfr bslam rfront geofusion (fbfr: FbF with depth refinement)
 #   PARAMS=FILE    configuration file for every method (run_offline --params; the method itself
 #                  is set per run), PARAMS_<method>=FILE for one method (e.g. PARAMS_geofusion)
 set -euo pipefail
@@ -54,7 +54,7 @@ for bag in "${bags[@]}"; do
   gt="$data/${scene}_gt.yaml"
   model_set=$(sed -n 's/^model_set: *//p' "$gt" | head -1)
   mkdir -p "$out/runs/$scene" "$out/eval/$scene"
-  for method in ${METHODS:-fbf bslam rfront geofusion}; do
+  for method in ${METHODS:-fbf fbfr bslam rfront geofusion}; do
     results="$out/runs/$scene/$method.yaml"
     params_var="PARAMS_$method"
     params_file="${!params_var:-${PARAMS:-}}"

@@ -27,6 +27,8 @@ class Table {
     input();
     keyframes();
     consistency();
+    refinement();
+    monitor();
     association();
     stageOne();
     relations();
@@ -88,7 +90,8 @@ class Table {
 
   void general() {
     text("method", "the method of the paper's comparison",
-         [](GeoFusionConfig& c) { return &c.method; }, {"geofusion", "rfront", "bslam", "fbf"});
+         [](GeoFusionConfig& c) { return &c.method; },
+         {"geofusion", "rfront", "bslam", "fbf", "fbfr"});
   }
   void modelSet() {
     text("model_set.name",
@@ -181,6 +184,59 @@ class Table {
             [f](GeoFusionConfig& c) { return &f(c)->render_mesh_triangles; });
     real("consistency.render_mesh_max_error_m", 0, 0.05, "... unless the surface moves more, m",
          [f](GeoFusionConfig& c) { return &f(c)->render_mesh_max_error_m; });
+  }
+  void refinement() {
+    auto f = [](GeoFusionConfig& c) { return &c.estimator.refinement; };
+    flag("refinement.enabled",
+         "align each detection to the depth before it is judged (geofusion, fbfr; off: the "
+         "paper's ablation)",
+         [f](GeoFusionConfig& c) { return &f(c)->enabled; });
+    integer("refinement.max_points", 10, 100000, "visible model surface points aligned, at most",
+            [f](GeoFusionConfig& c) { return &f(c)->max_points; });
+    integer("refinement.min_points", 3, 100000, "fewer with an observed depth: not refined",
+            [f](GeoFusionConfig& c) { return &f(c)->min_points; });
+    integer("refinement.iterations", 1, 100, "ICP rounds (projective association), at most",
+            [f](GeoFusionConfig& c) { return &f(c)->iterations; });
+    real("refinement.max_translation_m", 0, 1, "guard: a larger correction is refused, m",
+         [f](GeoFusionConfig& c) { return &f(c)->max_translation_m; });
+    real("refinement.max_rotation_rad", 0, 3.2, "guard: a larger rotation is refused, rad",
+         [f](GeoFusionConfig& c) { return &f(c)->max_rotation_rad; });
+    real("refinement.ray_window_m", 1e-4, 0.2,
+         "first step along the ray: the densest window of this width of the distances, m",
+         [f](GeoFusionConfig& c) { return &f(c)->ray_window_m; });
+    real("refinement.gate_m", 1e-4, 0.5, "ICP pairs farther from the model surface are left out, m",
+         [f](GeoFusionConfig& c) { return &f(c)->gate_m; });
+    real("refinement.loss_scale_m", 1e-5, 0.1, "Cauchy loss scale of the ICP residuals, m",
+         [f](GeoFusionConfig& c) { return &f(c)->loss_scale_m; });
+    real("refinement.prior_sigma_rotation_rad", 1e-4, 3.2,
+         "the detection as a prior: its rotation std, rad",
+         [f](GeoFusionConfig& c) { return &f(c)->prior_sigma_rotation_rad; });
+    real("refinement.prior_sigma_lateral_m", 1e-5, 1, "... and its std across the ray, m",
+         [f](GeoFusionConfig& c) { return &f(c)->prior_sigma_lateral_m; });
+    real("refinement.converged_translation_m", 0, 0.1, "converged when a round moves less, m",
+         [f](GeoFusionConfig& c) { return &f(c)->converged_translation_m; });
+    real("refinement.converged_rotation_rad", 0, 1, "... and turns less, rad",
+         [f](GeoFusionConfig& c) { return &f(c)->converged_rotation_rad; });
+    real("refinement.damping", 0, 100,
+         "Levenberg-Marquardt damping of the steps (share of the diagonal)",
+         [f](GeoFusionConfig& c) { return &f(c)->damping; });
+    real("refinement.min_inlier_gain", -1, 1, "accepted when the inlier ratio gains more than this",
+         [f](GeoFusionConfig& c) { return &f(c)->min_inlier_gain; });
+    real("refinement.ray_sigma_m", 1e-4, 0.5,
+         "stage I: translation std of a refined measurement along the ray, m",
+         [f](GeoFusionConfig& c) { return &f(c)->ray_sigma_m; });
+  }
+  void monitor() {
+    auto f = [](GeoFusionConfig& c) { return &c.estimator.monitor; };
+    integer("monitor.window_keyframes", 1, 10000,
+            "rejected detections are counted over the last N keyframes",
+            [f](GeoFusionConfig& c) { return &f(c)->window_keyframes; });
+    integer("monitor.min_detections", 1, 100000, "fewer scored detections in them: no verdict",
+            [f](GeoFusionConfig& c) { return &f(c)->min_detections; });
+    real("monitor.inconsistent_below", 0, 1, "a detection whose f_gc is below this is rejected",
+         [f](GeoFusionConfig& c) { return &f(c)->inconsistent_below; });
+    real("monitor.warn_share", 0, 1, "warn when at least this share of them is rejected",
+         [f](GeoFusionConfig& c) { return &f(c)->warn_share; });
   }
   void association() {
     auto f = [](GeoFusionConfig& c) { return &c.estimator.association; };

@@ -1,5 +1,7 @@
 #include "geofusion/estimation/optimization.h"
 
+#include "geofusion/estimation/depth_refinement.h"
+
 #include "geofusion/estimation/association.h"
 #include "geofusion/estimation/factors/contact_factor.h"
 #include "geofusion/estimation/factors/pose_block.h"
@@ -145,8 +147,12 @@ StageOneSummary optimizeStageOne(std::vector<Eigen::Isometry3d>* T_map_cam,
     Eigen::Vector3d axis;
     const bool free = freeAxis(model, &axis);
     const double s = std::sqrt(m.weight);
+    const Eigen::Matrix3d W_p = m.ray_sigma_m > 0
+                                    ? rayAlignedSqrtInformation(z.translation(), m.ray_sigma_m,
+                                                                config.measurement_sigma_position_m)
+                                    : Eigen::Matrix3d(wp * Eigen::Matrix3d::Identity());
     auto* cost = new ceres::AutoDiffCostFunction<RelativePoseFactor, 6, 7, 7>(
-        new RelativePoseFactor(z, s * wp, s * wq, free, axis));
+        new RelativePoseFactor(z, s * W_p, s * wq, free, axis));
     problem.AddResidualBlock(cost, makeLoss(config.measurement_loss), cam.data(), obj.data());
   }
   // The first camera fixes the gauge; outside the window the cameras stay where they are.

@@ -5,8 +5,10 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <stdexcept>
 
 namespace geofusion {
@@ -70,6 +72,59 @@ void emitStages(YAML::Emitter& out, const KeyframeResult& k) {
   out << YAML::EndMap;
 }
 
+// `detections:` per input detection: class, detector score, pose in and out (camera frame), the
+// refinement's outcome and correction, the consistency at the pose used and the decision.
+void emitDetections(YAML::Emitter& out, const std::vector<DetectionReport>& detections) {
+  out << YAML::Key << "detections" << YAML::Value << YAML::BeginSeq;
+  for (const DetectionReport& d : detections) {
+    out << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "class_name" << YAML::Value << d.class_name;
+    out << YAML::Key << "score" << YAML::Value << d.detector_score;
+    yaml_io::emitPose(out, "pose_in", d.T_cam_in);
+    yaml_io::emitPose(out, "pose_out", d.T_cam_out);
+    out << YAML::Key << "refinement" << YAML::Value << toString(d.refinement);
+    if (std::isfinite(d.ray_offset_m))
+      out << YAML::Key << "ray_offset_m" << YAML::Value << d.ray_offset_m;
+    out << YAML::Key << "correction_m" << YAML::Value << d.correction_translation_m;
+    out << YAML::Key << "correction_rad" << YAML::Value << d.correction_rotation_rad;
+    out << YAML::Key << "consistency" << YAML::Value << d.consistency;
+    out << YAML::Key << "ratios" << YAML::Value << YAML::Flow << YAML::BeginSeq << d.r_in << d.r_out
+        << d.r_occ << YAML::EndSeq;
+    out << YAML::Key << "decision" << YAML::Value << toString(d.decision);
+    out << YAML::Key << "object" << YAML::Value << d.object;
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+}
+
+std::vector<DetectionReport> readDetections(const YAML::Node& list) {
+  std::vector<DetectionReport> out;
+  for (const YAML::Node& n : list) {  // absent in results written before they were reported
+    DetectionReport d;
+    d.class_name = n["class_name"].as<std::string>();
+    d.detector_score = n["score"].as<double>();
+    d.T_cam_in = yaml_io::parsePose(n["pose_in"], "detection pose_in");
+    d.T_cam_out = yaml_io::parsePose(n["pose_out"], "detection pose_out");
+    const std::string refinement = n["refinement"].as<std::string>();
+    if (!parseRefinementOutcome(refinement, &d.refinement))
+      throw std::runtime_error("detection refinement: unknown outcome '" + refinement + "'");
+    d.ray_offset_m = n["ray_offset_m"] ? n["ray_offset_m"].as<double>()
+                                       : std::numeric_limits<double>::quiet_NaN();
+    d.correction_translation_m = n["correction_m"].as<double>();
+    d.correction_rotation_rad = n["correction_rad"].as<double>();
+    d.consistency = n["consistency"].as<double>();
+    d.r_in = n["ratios"][0].as<double>();
+    d.r_out = n["ratios"][1].as<double>();
+    d.r_occ = n["ratios"][2].as<double>();
+    const std::string decision = n["decision"].as<std::string>();
+    if (!parseDetectionDecision(decision, &d.decision))
+      throw std::runtime_error("detection decision: unknown '" + decision + "'");
+    d.object = n["object"].as<int>();
+    out.push_back(std::move(d));
+  }
+  return out;
+}
+
 void readStages(const YAML::Node& n, KeyframeResult* k) {
   if (!n) return;  // results written before the stages were reported
   for (auto [key, report] : {std::pair{"stage_one", &k->stage_one}, {"stage_two", &k->stage_two}}) {
@@ -121,6 +176,10 @@ bool writeRunResults(const std::string& path, const RunResults& r, std::string* 
     emitTimings(out, k.timings);
     emitStages(out, k);
     out << YAML::Key << "removed_ids" << YAML::Value << YAML::Flow << k.removed_ids;
+    out << YAML::Key << "skipped_detections" << YAML::Value << k.skipped_detections;
+    if (!k.detection_warning.empty())
+      out << YAML::Key << "detection_warning" << YAML::Value << k.detection_warning;
+    emitDetections(out, k.detections);
     emitObjects(out, k.objects, k.T_map_cam);
     out << YAML::EndMap;
   }
@@ -213,6 +272,9 @@ bool readRunResults(const std::string& path, const ModelSet& models, RunResults*
       kr.timings = readTimings(k["timings_ms"]);
       readStages(k["stages"], &kr);
       kr.removed_ids = k["removed_ids"].as<std::vector<int>>();
+      kr.skipped_detections = k["skipped_detections"].as<int>(0);
+      kr.detections = readDetections(k["detections"]);
+      kr.detection_warning = k["detection_warning"].as<std::string>("");
       kr.objects = readObjects(k["objects"], models);
       r.keyframes.push_back(std::move(kr));
     }

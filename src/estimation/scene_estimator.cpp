@@ -22,6 +22,7 @@ double msSince(Clock::time_point start) {
 const char* toString(Method method) {
   switch (method) {
     case Method::kFrameByFrame: return "FbF";
+    case Method::kFrameByFrameRefined: return "FbF-R";
     case Method::kBaselineSlam: return "B-SLAM";
     case Method::kRobustFrontEnd: return "R-Front";
     default: return "GeoFusion";
@@ -34,6 +35,8 @@ bool parseMethod(const std::string& name, Method* method) {
     if (c != '-' && c != '_') n += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   if (n == "fbf" || n == "framebyframe")
     *method = Method::kFrameByFrame;
+  else if (n == "fbfr" || n == "fbfrefined")
+    *method = Method::kFrameByFrameRefined;
   else if (n == "bslam")
     *method = Method::kBaselineSlam;
   else if (n == "rfront")
@@ -49,22 +52,61 @@ MethodStages stagesOf(Method method) {
   MethodStages s;
   switch (method) {
     case Method::kFrameByFrame: s.map_is_keyframe_detections = true; break;
+    case Method::kFrameByFrameRefined:
+      s.map_is_keyframe_detections = s.depth_refinement = true;
+      break;
     case Method::kBaselineSlam: s.stage_one = true; break;
     case Method::kRobustFrontEnd: s.geometric_consistency = s.false_positive_removal = true; break;
     case Method::kGeoFusion:
       s.geometric_consistency = s.false_positive_removal = true;
-      s.stage_one = s.relations_and_stage_two = true;
+      s.stage_one = s.relations_and_stage_two = s.depth_refinement = true;
       break;
   }
   return s;
 }
 
+namespace {
+const std::pair<DetectionDecision, const char*> kDecisionNames[] = {
+    {DetectionDecision::kSkipped, "skipped"},
+    {DetectionDecision::kFrameObject, "frame_object"},
+    {DetectionDecision::kNewObject, "new_object"},
+    {DetectionDecision::kNewCandidate, "new_candidate"},
+    {DetectionDecision::kAssociated, "associated"},
+    {DetectionDecision::kCandidate, "candidate"},
+    {DetectionDecision::kRemoved, "removed"},
+};
+
+// The refinement a method runs: the configured one, on only when its stages include it.
+DepthRefinementConfig refinementOf(const EstimatorConfig& config, const MethodStages& stages) {
+  DepthRefinementConfig r = config.refinement;
+  r.enabled = r.enabled && stages.depth_refinement;
+  return r;
+}
+}  // namespace
+
+const char* toString(DetectionDecision decision) {
+  for (const auto& d : kDecisionNames)
+    if (d.first == decision) return d.second;
+  return "skipped";
+}
+
+bool parseDetectionDecision(const std::string& name, DetectionDecision* decision) {
+  for (const auto& d : kDecisionNames) {
+    if (name == d.second) {
+      *decision = d.first;
+      return true;
+    }
+  }
+  return false;
+}
+
 SceneEstimator::SceneEstimator(const ModelSet& models, const EstimatorConfig& config,
                                std::shared_ptr<OffscreenRenderer> renderer)
-    : config_(config), stages_(stagesOf(config.method)) {
+    : config_(config), stages_(stagesOf(config.method)), monitor_(config.monitor) {
   for (const auto& m : models.models()) models_[m->name] = m;
   if (!renderer) renderer = std::make_shared<OffscreenRenderer>();
   scorer_ = std::make_unique<ConsistencyScorer>(std::move(renderer), config.consistency);
+  refiner_ = std::make_unique<DepthRefiner>(scorer_.get(), refinementOf(config, stages_));
   collider_ = std::make_unique<HullCollider>();
 }
 
@@ -75,6 +117,8 @@ void SceneEstimator::setConfig(const EstimatorConfig& config) {
   config_ = config;
   config_.method = method;
   scorer_->setConfig(config.consistency);
+  refiner_->setConfig(refinementOf(config_, stages_));
+  monitor_.setConfig(config.monitor);
 }
 
 void SceneEstimator::reset() {
@@ -86,6 +130,7 @@ void SceneEstimator::reset() {
   support_model_.reset();
   contacts_.clear();
   frame_objects_.clear();
+  monitor_.reset();
 }
 
 Eigen::Isometry3d SceneEstimator::T_map_odom() const {
@@ -139,9 +184,11 @@ KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
   timings.consistency_ms = msSince(t0);
 
   t0 = Clock::now();
+  std::vector<int> started;
   std::vector<int> detection_object = stages_.map_is_keyframe_detections
                                           ? mapKeyframeDetections(kf, detections, t)
-                                          : associateDetections(kf, detections, t);
+                                          : associateDetections(kf, detections, t, &started);
+  const std::vector<int> assigned = detection_object;
   std::vector<int> removed;
   if (stages_.false_positive_removal) {
     std::vector<int> touched;
@@ -164,9 +211,9 @@ KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
   if (stages_.relations_and_stage_two) stage_two = runRelationsAndStageTwo(&kf, &timings);
 
   KeyframeResult out = result(t, kf.stamp_s);
+  out.detections = reportDetections(kf, detections, assigned, started, removed);
+  out.detection_warning = monitor_.add(out.detections);
   out.removed_ids = std::move(removed);
-  out.detection_consistency = detections.score;
-  out.detection_object = std::move(detection_object);
   out.skipped_detections = detections.skipped;
   out.stage_one = stage_one;
   out.stage_two = stage_two;
@@ -186,14 +233,18 @@ Eigen::Isometry3d SceneEstimator::appendCameraPose(const Keyframe& kf) {
   return T_map_cam;
 }
 
-// Usable detections (known class, enough score, finite pose) and their scores: the geometric
-// consistency f_gc, or the detector's own score for methods without it.
+// Usable detections (known class, enough score, finite pose), depth-refined when the method
+// refines, and their scores: the geometric consistency f_gc at the pose used, or the detector's
+// own score for methods without it.
 SceneEstimator::ScoredDetections SceneEstimator::scoreDetections(const Keyframe& kf) const {
   ScoredDetections out;
   out.models.resize(kf.detections.size());
   out.score.assign(kf.detections.size(), -1.0);
+  out.refinement.resize(kf.detections.size());
+  const bool render = stages_.geometric_consistency || stages_.depth_refinement;
   for (std::size_t k = 0; k < kf.detections.size(); ++k) {
     const ObjectMeasurement& d = kf.detections[k];
+    out.refinement[k].T_cam_obj = d.T_cam_obj;
     const auto it = models_.find(d.class_name);
     if (it == models_.end() || d.score < config_.min_detection_score ||
         !d.T_cam_obj.matrix().allFinite()) {
@@ -201,14 +252,58 @@ SceneEstimator::ScoredDetections SceneEstimator::scoreDetections(const Keyframe&
       continue;
     }
     out.models[k] = it->second;
+    if (render) out.refinement[k] = refiner_->refine(it->second, d.T_cam_obj, kf.depth, kf.K);
     if (!stages_.geometric_consistency) {
       out.score[k] = d.score;
     } else if (kf.depth.data) {
-      out.score[k] = scorer_->score(it->second, d.T_cam_obj, kf.depth, kf.K).score;
+      out.score[k] = out.refinement[k].after.score;
     } else {
       out.score[k] = config_.consistency.undetermined_score;
     }
     out.usable.push_back(static_cast<int>(k));
+  }
+  return out;
+}
+
+// Each detection's report: its poses, refinement, score and what became of it.
+std::vector<DetectionReport> SceneEstimator::reportDetections(
+    const Keyframe& kf, const ScoredDetections& detections,
+    const std::vector<int>& detection_object, const std::vector<int>& started,
+    const std::vector<int>& removed) const {
+  auto contains = [](const std::vector<int>& v, int x) {
+    return std::find(v.begin(), v.end(), x) != v.end();
+  };
+  std::vector<DetectionReport> out(kf.detections.size());
+  for (std::size_t k = 0; k < kf.detections.size(); ++k) {
+    const ObjectMeasurement& d = kf.detections[k];
+    const DepthRefinement& r = detections.refinement[k];
+    DetectionReport& rep = out[k];
+    rep.class_name = d.class_name;
+    rep.detector_score = d.score;
+    rep.T_cam_in = d.T_cam_obj;
+    rep.T_cam_out = r.T_cam_obj;
+    rep.refinement = r.outcome;
+    rep.ray_offset_m = r.ray_offset_m;
+    rep.correction_translation_m = r.correction_translation_m;
+    rep.correction_rotation_rad = r.correction_rotation_rad;
+    rep.consistency = detections.score[k];
+    rep.r_in = r.after.r_in, rep.r_out = r.after.r_out, rep.r_occ = r.after.r_occ;
+    rep.object = detection_object[k];
+    if (!detections.models[k] || rep.object < 0) continue;  // skipped
+    if (stages_.map_is_keyframe_detections) {
+      rep.decision = DetectionDecision::kFrameObject;
+      continue;
+    }
+    const auto track = std::find_if(tracks_.begin(), tracks_.end(),
+                                    [&](const Track& tr) { return tr.id == rep.object; });
+    const bool in_map =
+        track != tracks_.end() && (track->confirmed || !stages_.false_positive_removal);
+    if (contains(removed, rep.object) || track == tracks_.end())
+      rep.decision = DetectionDecision::kRemoved;
+    else if (contains(started, rep.object))
+      rep.decision = in_map ? DetectionDecision::kNewObject : DetectionDecision::kNewCandidate;
+    else
+      rep.decision = in_map ? DetectionDecision::kAssociated : DetectionDecision::kCandidate;
   }
   return out;
 }
@@ -224,7 +319,7 @@ std::vector<int> SceneEstimator::mapKeyframeDetections(const Keyframe& kf,
     ObjectEstimate e;
     e.id = next_id_++;
     e.model = detections.models[static_cast<std::size_t>(k)];
-    e.T_map_obj = T_map_cam_.back() * d.T_cam_obj;
+    e.T_map_obj = T_map_cam_.back() * detections.pose(static_cast<std::size_t>(k));
     e.existence = d.score;
     e.false_positive = 1.0 - d.score;
     e.best_consistency = d.score;
@@ -239,22 +334,24 @@ std::vector<int> SceneEstimator::mapKeyframeDetections(const Keyframe& kf,
 // Algorithm 1: each usable detection goes to the object of highest likelihood (one measurement
 // per object), or starts a new object. Returns each detection's object id (-1: none).
 std::vector<int> SceneEstimator::associateDetections(const Keyframe& kf,
-                                                     const ScoredDetections& detections, int t) {
+                                                     const ScoredDetections& detections, int t,
+                                                     std::vector<int>* started) {
   const Eigen::Isometry3d& T_map_cam = T_map_cam_.back();
   const std::vector<int> assignment =
       associate(associationLikelihood(kf, detections), config_.association);
   std::vector<int> detection_object(kf.detections.size(), -1);
   for (std::size_t r = 0; r < detections.usable.size(); ++r) {
     const std::size_t k = static_cast<std::size_t>(detections.usable[r]);
-    const ObjectMeasurement& d = kf.detections[k];
-    const Observation obs{t, d.T_cam_obj, detections.score[k]};
-    Track& tr = assignment[r] < 0 ? startTrack(detections.models[k], T_map_cam * d.T_cam_obj, t)
+    const Eigen::Isometry3d& T_cam_obj = detections.pose(k);
+    const Observation obs{t, T_cam_obj, detections.score[k], detections.refinement[k].accepted()};
+    if (assignment[r] < 0) started->push_back(next_id_);
+    Track& tr = assignment[r] < 0 ? startTrack(detections.models[k], T_map_cam * T_cam_obj, t)
                                   : tracks_[static_cast<std::size_t>(assignment[r])];
     tr.observations.push_back(obs);
     tr.last_keyframe = t;
     // Without stage I (R-Front): the pose of the most consistent measurement, through odometry.
     if (!stages_.stage_one && obs.consistency >= tr.best_consistency) {
-      tr.T_stage_one = tr.T_refined = T_map_cam * d.T_cam_obj;
+      tr.T_stage_one = tr.T_refined = T_map_cam * T_cam_obj;
     }
     tr.best_consistency = std::max(tr.best_consistency, obs.consistency);
     detection_object[k] = tr.id;
@@ -279,7 +376,7 @@ Eigen::MatrixXd SceneEstimator::associationLikelihood(const Keyframe& kf,
       const Eigen::Isometry3d predicted = T_cam_map * reportedPose(tr);
       likelihood(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(j)) =
           detections.score[k] *
-          poseLikelihood(tr.model->symmetry, predicted, d.T_cam_obj, config_.association);
+          poseLikelihood(tr.model->symmetry, predicted, detections.pose(k), config_.association);
     }
   }
   return likelihood;
@@ -391,7 +488,8 @@ StageReport SceneEstimator::runStageOne() {
     objects.push_back(tr.T_stage_one);
     models.push_back(tr.model.get());
     for (const Observation& o : tr.observations) {
-      measurements.push_back({o.keyframe, static_cast<int>(i), o.T_cam_obj, 1.0});
+      measurements.push_back({o.keyframe, static_cast<int>(i), o.T_cam_obj, 1.0,
+                              o.refined ? config_.refinement.ray_sigma_m : 0.0});
     }
   }
   const StageOneSummary s =

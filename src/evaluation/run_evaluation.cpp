@@ -404,7 +404,9 @@ std::vector<bool> mappedObjects(const GroundTruth& gt, const KeyframeResult& k,
 void evaluateLifecycle(const GroundTruth& gt, const RunResults& results,
                        const KeyframeMatcher& frames, const MapScore& score,
                        const EvaluationConfig& config, RunEvaluation* ev) {
-  ev->has_lifecycle = results.method != toString(Method::kFrameByFrame);
+  Method method = Method::kGeoFusion;
+  ev->has_lifecycle =
+      !(parseMethod(results.method, &method) && stagesOf(method).map_is_keyframe_detections);
   if (!ev->has_lifecycle) return;
   const std::size_t n = gt.scene.objects.size();
   std::vector<ObjectLifecycle> life(n);

@@ -91,24 +91,32 @@ MeshHandle ConsistencyScorer::handleFor(const std::shared_ptr<const ObjectModel>
   return h;
 }
 
+const RenderedImages* ConsistencyScorer::render(const std::shared_ptr<const ObjectModel>& model,
+                                                const Eigen::Isometry3d& T_cam_model,
+                                                const PinholeIntrinsics& K) {
+  if (!model || !renderer_ || !renderer_->ok() || !T_cam_model.matrix().allFinite()) return nullptr;
+  const MeshHandle mesh = handleFor(model);
+  if (mesh < 0) return nullptr;
+  const PixelBox region = renderer_->projectedRegion(K, mesh, T_cam_model);
+  if (!region.valid()) return nullptr;
+  RenderItem item;
+  item.mesh = mesh;
+  item.T_cam_model = T_cam_model;
+  if (!renderer_->render(K, {item}, &scratch_, region, OffscreenRenderer::kDepth)) return nullptr;
+  return &scratch_;
+}
+
 ConsistencyResult ConsistencyScorer::score(const std::shared_ptr<const ObjectModel>& model,
                                            const Eigen::Isometry3d& T_cam_model,
                                            const DepthImageView& observed,
                                            const PinholeIntrinsics& K) {
-  ConsistencyResult undetermined;
-  undetermined.score = config_.undetermined_score;
-  if (!model || !renderer_ || !renderer_->ok() || !T_cam_model.matrix().allFinite())
+  const RenderedImages* rendered = render(model, T_cam_model, K);
+  if (!rendered) {
+    ConsistencyResult undetermined;
+    undetermined.score = config_.undetermined_score;
     return undetermined;
-  const MeshHandle mesh = handleFor(model);
-  if (mesh < 0) return undetermined;
-  const PixelBox region = renderer_->projectedRegion(K, mesh, T_cam_model);
-  if (!region.valid()) return undetermined;
-  RenderItem item;
-  item.mesh = mesh;
-  item.T_cam_model = T_cam_model;
-  if (!renderer_->render(K, {item}, &scratch_, region, OffscreenRenderer::kDepth))
-    return undetermined;
-  return compareDepth(scratch_, observed, K, config_);
+  }
+  return compareDepth(*rendered, observed, K, config_);
 }
 
 }  // namespace geofusion

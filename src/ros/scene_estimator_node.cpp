@@ -181,6 +181,8 @@ void SceneEstimatorNode::onFrame(const sensor_msgs::ImageConstPtr& /*rgb*/,
     ++keyframes_;
     last_ = result;
     reportFailedStages(result);
+    if (!result.detection_warning.empty())
+      ROS_WARN_STREAM_THROTTLE(10.0, "geofusion: " << result.detection_warning);
   }
   std_msgs::Header header;
   header.stamp = dets->header.stamp;
@@ -284,6 +286,8 @@ void SceneEstimatorNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   } else if (last_.stage_one.failed() || last_.stage_two.failed()) {
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
                    "the last keyframe's optimisation failed; its result is not used");
+  } else if (!last_.detection_warning.empty()) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, last_.detection_warning);
   } else if (tf_failures_ + bad_depth_ > frames_ / 2) {
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
                    "most frames skipped (missing TF or unusable depth)");
@@ -291,6 +295,15 @@ void SceneEstimatorNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "running");
   }
   status.add("method", method_name_);
+  const double inconsistent_below = pipeline_->estimator().config().monitor.inconsistent_below;
+  int refined = 0, rejected = 0;
+  for (const DetectionReport& d : last_.detections) {
+    refined += d.refinement == RefinementOutcome::kAccepted;
+    rejected += d.consistency >= 0 && d.consistency < inconsistent_below;
+  }
+  status.add("detections (last keyframe)", last_.detections.size());
+  status.add("depth-refined (last keyframe)", refined);
+  status.add("inconsistent with depth (last keyframe)", rejected);
   status.add("synchronised frames", frames_);
   if (subscriber_) {
     // Input rates over the last diagnostics period; messages that never made a synchronised set

@@ -61,7 +61,7 @@ from pycocotools.coco import COCO  # noqa: E402
 from pycocotools.cocoeval import COCOeval  # noqa: E402
 
 FORMAT = 'geofusion_evaluation_v1'
-METHOD_ORDER = ['FbF', 'B-SLAM', 'R-Front', 'GeoFusion']
+METHOD_ORDER = ['FbF', 'FbF-R', 'B-SLAM', 'R-Front', 'GeoFusion']
 OURS = 'GeoFusion'
 BASELINE = 'FbF'
 SCORE_THRESHOLD = 0.5

@@ -2,7 +2,7 @@
 // C++ API, no ROS master) and writes a results file (docs/results.md).
 //
 //   run_offline --bag FILE.bag --out results.yaml [--params FILE.yaml] [--set KEY=VALUE]...
-//       [--method geofusion|fbf|bslam|rfront] [--model-set primitives|ycb_video|FILE.yaml]
+//       [--method geofusion|fbf|fbfr|bslam|rfront] [--model-set primitives|ycb_video|FILE.yaml]
 //       [--models DIR] [--keyframe-every N]
 //       [--depth-topic T] [--camera-info-topic T] [--detections-topic T] [--odom-frame odom]
 //       [--background FILE.bt] [--quiet]
@@ -55,7 +55,7 @@ struct Options {
 
 void usage() {
   std::cerr << "usage: run_offline --bag FILE.bag --out RESULTS.yaml [--params FILE.yaml]\n"
-               "         [--set KEY=VALUE]... [--method geofusion|fbf|bslam|rfront]\n"
+               "         [--set KEY=VALUE]... [--method geofusion|fbf|fbfr|bslam|rfront]\n"
                "         [--model-set primitives|ycb_video|FILE.yaml] [--models DIR]\n"
                "         [--keyframe-every N] [--depth-topic T] [--camera-info-topic T]\n"
                "         [--detections-topic T] [--odom-frame odom] [--background FILE.bt]\n"
@@ -263,6 +263,18 @@ int main(int argc, char** argv) {
       results.frames_skipped, results.final_map.objects.size(), results.final_map.contacts.size(),
       results.wall_time_s, duration, duration > 0 ? results.wall_time_s / duration : 0.0,
       opt.out.c_str());
+  int warned_keyframes = 0;
+  std::string last_warning;
+  for (const KeyframeResult& k : results.keyframes) {
+    if (k.detection_warning.empty()) continue;
+    ++warned_keyframes;
+    last_warning = k.detection_warning;
+  }
+  if (warned_keyframes > 0) {
+    std::cerr << "run_offline: warning: in " << warned_keyframes << " of "
+              << results.keyframes.size() << " keyframes " << last_warning
+              << " (the last one; `detections:` in " << opt.out << ")\n";
+  }
   if (const int failed = failedStages(results)) {
     std::cerr << "run_offline: warning: " << failed
               << " optimisation stage(s) failed and their results were not used (`stages:` in "

@@ -125,7 +125,7 @@ TEST(Config, BadValuesAreErrorsNamingFileKeyAndAllowedRange) {
       {"association: {eps_fp: 3}", "association.eps_fp", "[0.05, 1]"},
       {"stage_one: {max_iterations: 2.5}", "stage_one.max_iterations", "an integer"},
       {"consistency: {eps_res: abc}", "consistency.eps_res", "a number"},
-      {"method: orbslam", "method", "one of geofusion, rfront, bslam, fbf"},
+      {"method: orbslam", "method", "one of geofusion, rfront, bslam, fbf, fbfr"},
       {"association: {joint_assignment: maybe}", "association.joint_assignment", "true or false"},
       {"relations: {gravity: [0, 0]}", "relations.gravity", "[x, y, z]"},
       {"stage_two: {contact_loss: {type: l1}}", "stage_two.contact_loss.type", "huber"},

@@ -156,7 +156,7 @@ class OfflineRunnerTest(unittest.TestCase):
                             '--method', 'orbslam'], stdout=subprocess.PIPE,
                            stderr=subprocess.PIPE, universal_newlines=True)
         self.assertEqual(p.returncode, 2)
-        self.assertIn("method: expected one of geofusion, rfront, bslam, fbf, got 'orbslam'",
+        self.assertIn("method: expected one of geofusion, rfront, bslam, fbf, fbfr, got 'orbslam'",
                       p.stderr)
         p = subprocess.run([tool, '--bag', '/nonexistent.bag', '--out',
                             os.path.join(self.dir, 'y.yaml')], stdout=subprocess.PIPE,

@@ -41,6 +41,9 @@ struct StageOneMeasurement {
   int object = 0;
   Eigen::Isometry3d T_cam_obj = Eigen::Isometry3d::Identity();
   double weight = 1.0;  ///< scales the information (e.g. by geometric consistency)
+  /// > 0: a depth-refined measurement, this translation std along the viewing ray (across it,
+  /// measurement_sigma_position_m).
+  double ray_sigma_m = 0.0;
 };
 
 /// How a stage's solve ended. Its result is used only when converged or stopped at the iteration

@@ -9,6 +9,8 @@
 #include "geofusion/common/measurement.h"
 #include "geofusion/estimation/association.h"
 #include "geofusion/estimation/contacts.h"
+#include "geofusion/estimation/depth_refinement.h"
+#include "geofusion/estimation/detection_monitor.h"
 #include "geofusion/estimation/optimization.h"
 #include "geofusion/estimation/relations.h"
 #include "geofusion/model/object_model.h"
@@ -28,11 +30,19 @@ class OffscreenRenderer;
 class ConsistencyScorer;
 class HullCollider;
 
-/// FbF: each keyframe's detections as they are. B-SLAM: association by detector confidence, no
-/// false-positive removal or merging, stage I only. R-Front: GeoFusion's association (geometric
-/// consistency, false-positive removal, merging), no optimisation. GeoFusion: everything.
-enum class Method { kFrameByFrame, kBaselineSlam, kRobustFrontEnd, kGeoFusion };
-const char* toString(Method method);  ///< "FbF", "B-SLAM", "R-Front", "GeoFusion"
+/// FbF: each keyframe's detections as they are. FbF-R: the same, depth-refined (what refinement
+/// alone buys; not in the paper). B-SLAM: association by detector confidence, no false-positive
+/// removal or merging, stage I only. R-Front: GeoFusion's association (geometric consistency,
+/// false-positive removal, merging), no optimisation. GeoFusion: everything, with depth
+/// refinement.
+enum class Method {
+  kFrameByFrame,
+  kFrameByFrameRefined,
+  kBaselineSlam,
+  kRobustFrontEnd,
+  kGeoFusion
+};
+const char* toString(Method method);  ///< "FbF", "FbF-R", "B-SLAM", "R-Front", "GeoFusion"
 bool parseMethod(const std::string& name, Method* method);  ///< also accepts lower case
 
 /// The stages a method composes, in the order a keyframe runs them: score the detections
@@ -41,6 +51,7 @@ bool parseMethod(const std::string& name, Method* method);  ///< also accepts lo
 /// stage I every few keyframes, geometric relations and stage II.
 struct MethodStages {
   bool map_is_keyframe_detections = false;  ///< FbF: the keyframe's detections are the map
+  bool depth_refinement = false;            ///< detections aligned to the depth first
   bool geometric_consistency = false;       ///< f_gc scores (else the detector's score)
   bool false_positive_removal = false;      ///< and merging of overlapping objects
   bool stage_one = false;                   ///< camera and object poses in the factor graph
@@ -51,6 +62,8 @@ MethodStages stagesOf(Method method);
 struct EstimatorConfig {
   Method method = Method::kGeoFusion;
   ConsistencyConfig consistency;
+  DepthRefinementConfig refinement;  ///< used by the methods whose stages include it
+  DetectionMonitorConfig monitor;    ///< when most detections are rejected, say why
   AssociationConfig association;
   StageOneConfig stage_one;
   ContactConfig contacts;
@@ -99,6 +112,36 @@ struct StageReport {
   bool failed() const { return ran() && !usable(status); }  ///< its result was not used
 };
 
+/// What became of one detection of a keyframe.
+enum class DetectionDecision {
+  kSkipped,       ///< unknown class, below the score threshold or a pose that is not finite
+  kFrameObject,   ///< FbF: an object of this keyframe's map
+  kNewObject,     ///< started an object that is in the map
+  kNewCandidate,  ///< started a candidate (false-positive score too high for the map)
+  kAssociated,    ///< measured an object of the map
+  kCandidate,     ///< measured a candidate that is still not in the map
+  kRemoved,       ///< its object was removed or merged away at this keyframe
+};
+const char* toString(DetectionDecision decision);
+bool parseDetectionDecision(const std::string& name, DetectionDecision* decision);
+
+/// One detection of a keyframe: as it came, as it was used, its score and its fate.
+struct DetectionReport {
+  std::string class_name;
+  double detector_score = 0.0;
+  Eigen::Isometry3d T_cam_in = Eigen::Isometry3d::Identity();   ///< as detected
+  Eigen::Isometry3d T_cam_out = Eigen::Isometry3d::Identity();  ///< as used (refined or not)
+  RefinementOutcome refinement = RefinementOutcome::kNotAttempted;
+  double ray_offset_m = 0.0;  ///< observed surface behind (+) the detected one, NaN: unknown
+  double correction_translation_m = 0.0, correction_rotation_rad = 0.0;
+  /// f_gc (or the detector's score for methods without it) at T_cam_out, -1 not scored; the
+  /// ratios at T_cam_out (zero when not rendered).
+  double consistency = -1.0;
+  double r_in = 0.0, r_out = 0.0, r_occ = 0.0;
+  DetectionDecision decision = DetectionDecision::kSkipped;
+  int object = -1;  ///< the object (or candidate) id it went to
+};
+
 struct KeyframeResult {
   int keyframe = -1;
   double stamp_s = 0.0;
@@ -107,10 +150,12 @@ struct KeyframeResult {
   std::vector<int> removed_ids;         ///< objects removed or merged away at this keyframe
   /// Contacts among `objects` (indices into it; -1 = the support plane).
   std::vector<FeatureContact> contacts;
-  std::vector<double> detection_consistency;  ///< per input detection (-1: not scored)
-  std::vector<int> detection_object;          ///< per input detection: object id, -1 = none
-  int skipped_detections = 0;                 ///< unknown class or below min score
-  StageReport stage_one;                      ///< a failed stage's result is not used
+  std::vector<DetectionReport> detections;  ///< per input detection, in order
+  /// Most detections of the last keyframes rejected as inconsistent with depth, and the likely
+  /// cause (DetectionMonitor); empty when not.
+  std::string detection_warning;
+  int skipped_detections = 0;  ///< unknown class or below min score
+  StageReport stage_one;       ///< a failed stage's result is not used
   StageReport stage_two;
   StageTimings timings;
 };
@@ -143,6 +188,7 @@ class SceneEstimator {
     int keyframe = 0;
     Eigen::Isometry3d T_cam_obj = Eigen::Isometry3d::Identity();
     double consistency = 0.0;  ///< f_gc (B-SLAM: the detector score)
+    bool refined = false;      ///< depth-refined: tight along the ray in stage I
   };
   struct Track {
     int id = -1;
@@ -161,16 +207,23 @@ class SceneEstimator {
   struct ScoredDetections {
     std::vector<int> usable;  ///< indices of the detections of known class and enough score
     std::vector<std::shared_ptr<const ObjectModel>> models;  ///< per detection (null: unusable)
-    std::vector<double> score;  ///< f_gc, or the detector's score (-1: not scored)
+    std::vector<double> score;                ///< f_gc, or the detector's score (-1: not scored)
+    std::vector<DepthRefinement> refinement;  ///< per detection: the pose to use, its scores
     int skipped = 0;
+    const Eigen::Isometry3d& pose(std::size_t k) const { return refinement[k].T_cam_obj; }
   };
 
   Eigen::Isometry3d appendCameraPose(const Keyframe& keyframe);
   ScoredDetections scoreDetections(const Keyframe& keyframe) const;
+  std::vector<DetectionReport> reportDetections(const Keyframe& keyframe,
+                                                const ScoredDetections& detections,
+                                                const std::vector<int>& detection_object,
+                                                const std::vector<int>& started,
+                                                const std::vector<int>& removed) const;
   std::vector<int> mapKeyframeDetections(const Keyframe& keyframe,
                                          const ScoredDetections& detections, int t);
   std::vector<int> associateDetections(const Keyframe& keyframe, const ScoredDetections& detections,
-                                       int t);
+                                       int t, std::vector<int>* started);
   Eigen::MatrixXd associationLikelihood(const Keyframe& keyframe,
                                         const ScoredDetections& detections) const;
   Track& startTrack(const std::shared_ptr<const ObjectModel>& model,
@@ -191,6 +244,8 @@ class SceneEstimator {
   MethodStages stages_;
   std::map<std::string, std::shared_ptr<const ObjectModel>> models_;
   std::unique_ptr<ConsistencyScorer> scorer_;
+  std::unique_ptr<DepthRefiner> refiner_;
+  DetectionMonitor monitor_;
   std::unique_ptr<HullCollider> collider_;
   std::vector<Track> tracks_;
   int next_id_ = 0;

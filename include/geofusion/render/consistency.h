@@ -82,6 +82,12 @@ class ConsistencyScorer {
                           const Eigen::Isometry3d& T_cam_model, const DepthImageView& observed,
                           const PinholeIntrinsics& K);
 
+  /// The depth of `model` rendered alone at T_cam_model in its projected region (valid until the
+  /// next call); null when it cannot be rendered or lies outside the view. score() is
+  /// compareDepth() of this.
+  const RenderedImages* render(const std::shared_ptr<const ObjectModel>& model,
+                               const Eigen::Isometry3d& T_cam_model, const PinholeIntrinsics& K);
+
   const ConsistencyConfig& config() const { return config_; }
   void setConfig(const ConsistencyConfig& config) { config_ = config; }
   OffscreenRenderer& renderer() { return *renderer_; }

@@ -19,14 +19,19 @@ Eigen::Matrix<T, 3, 1> rotationResidual(const Eigen::Quaternion<T>& q_err) {
 
 /// Relative pose a^-1 b against a measured one: the odometry factor (a = x_{t-1}, b = x_t), the
 /// object measurement factor (a = x_t, b = o_j) and, with a fixed identity a, the object prior.
-/// Residual [w_p (t_pred - t_meas); w_q rot(q_meas^-1 q_pred)], rotation in the measured frame;
-/// a continuous symmetry axis (model frame) is left free (its rotation component removed).
+/// Residual [W_p (t_pred - t_meas); w_q rot(q_meas^-1 q_pred)], rotation in the measured frame;
+/// a continuous symmetry axis (model frame) is left free (its rotation component removed). W_p is
+/// w_p I, or a 3 x 3 square-root information (a depth-refined measurement: tight along the ray).
 struct RelativePoseFactor {
   RelativePoseFactor(const Eigen::Isometry3d& measured, double w_p, double w_q, bool free_axis,
                      const Eigen::Vector3d& axis)
+      : RelativePoseFactor(measured, Eigen::Matrix3d(w_p * Eigen::Matrix3d::Identity()), w_q,
+                           free_axis, axis) {}
+  RelativePoseFactor(const Eigen::Isometry3d& measured, const Eigen::Matrix3d& W_p, double w_q,
+                     bool free_axis, const Eigen::Vector3d& axis)
       : q_meas(measured.linear()),
         t_meas(measured.translation()),
-        w_p(w_p),
+        W_p(W_p),
         w_q(w_q),
         free_axis(free_axis),
         axis(axis.normalized()) {
@@ -41,16 +46,17 @@ struct RelativePoseFactor {
     const Eigen::Map<const Eigen::Matrix<T, 3, 1>> Ta(a + 4), Tb(b + 4);
     const Eigen::Quaternion<T> q_pred = Qa.conjugate() * Qb;
     const Eigen::Matrix<T, 3, 1> t_pred = Qa.conjugate() * (Tb - Ta);
-    const Eigen::Matrix<T, 3, 1> dt = t_pred - t_meas.cast<T>();
+    const Eigen::Matrix<T, 3, 1> dt = W_p.cast<T>() * (t_pred - t_meas.cast<T>());
     Eigen::Matrix<T, 3, 1> v = rotationResidual<T>(q_meas.cast<T>().conjugate() * q_pred);
     if (free_axis) v -= axis.cast<T>() * axis.cast<T>().dot(v);
-    for (int i = 0; i < 3; ++i) r[i] = T(w_p) * dt[i], r[3 + i] = T(w_q) * v[i];
+    for (int i = 0; i < 3; ++i) r[i] = dt[i], r[3 + i] = T(w_q) * v[i];
     return true;
   }
 
   Eigen::Quaterniond q_meas;
   Eigen::Vector3d t_meas;
-  double w_p, w_q;
+  Eigen::Matrix3d W_p;
+  double w_q;
   bool free_axis;
   Eigen::Vector3d axis;
 };
