@@ -411,6 +411,21 @@ def lifecycle_figures(evals):
             'lifecycle_objects': sum(len(x.get('objects') or []) for x in lc)}
 
 
+def class_recall(evals):
+    """Per class, over the scenes: {class: [true objects, of them in the final map]} (from the
+    evaluation files' contact_graph objects and their matches)."""
+    out = {}
+    for ev in evals:
+        graph = ev.get('contact_graph') or {}
+        matched = {int(o['match']) for o in graph.get('estimated_objects') or []
+                   if o.get('match', -1) is not None and int(o.get('match', -1)) >= 0}
+        for o in graph.get('true_objects') or []:
+            counts = out.setdefault(str(o['class_name']), [0, 0])
+            counts[0] += 1
+            counts[1] += int(o['index']) in matched
+    return out
+
+
 def detector_error_figures(evals):
     """The detector's persistent phantoms and swapped classes, and how many of them the final
     maps keep, summed over the scenes (None for files made before they were measured)."""
@@ -442,6 +457,7 @@ def method_summary(evals):
     out.update(mask_box_metrics(evals))
     out.update(detector_error_figures(evals))
     out.update(trajectory_figures(evals))
+    out['class_recall'] = class_recall(evals)
     out.update(contact_metrics(evals))
     out.update(physics_metrics(evals))
     out.update(timing_metrics(evals))
@@ -932,6 +948,18 @@ def write_report(summary, out_dir, figures, command):
             for n, m in methods.items()]
     md += _table(['method', 'phantoms in the final map', 'swapped classes in the final map',
                   'ATE (mm)', 'odometry ATE (mm)'], rows) + ['']
+
+    classes = sorted({c for m in methods.values() for c in (m.get('class_recall') or {})})
+    if classes:
+        md += ['## Final-map recall per class (mapped / present, summed over scenes)', '']
+        rows = []
+        for c in classes:
+            row = [c]
+            for m in methods.values():
+                true, found = (m.get('class_recall') or {}).get(c, [0, 0])
+                row.append('%d / %d' % (found, true) if true else '-')
+            rows.append(row)
+        md += _table(['class'] + list(methods), rows) + ['']
 
     md += ['## Time', '']
     rows = [[n, _num(m['ms_per_keyframe_p50']), _num(m['ms_per_keyframe_p95']),

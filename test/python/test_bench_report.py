@@ -219,6 +219,20 @@ class OtherMetricsTest(unittest.TestCase):
         self.assertEqual(c['contact_recall'], 0.0)
         self.assertIsNone(c['contact_f1'])
 
+    def test_class_recall_from_the_final_maps(self):
+        # make_eval's final map matches true objects 0..3, one class each; a second scene where
+        # object 2 is missed.
+        a = make_eval(scene='s1')
+        b = make_eval(scene='s2')
+        for o in b['contact_graph']['estimated_objects']:
+            if o['match'] == 2:
+                o['match'] = -1
+        recall = bench_report.class_recall([a, b])
+        self.assertEqual(recall['003_object_3'], [2, 1])
+        self.assertEqual(recall['001_object_1'], [2, 2])
+        m = bench_report.method_summary([a, b])
+        self.assertEqual(m['class_recall']['003_object_3'], [2, 1])
+
     def test_physics_and_time(self):
         m = bench_report.method_summary([make_eval(), make_eval(scene='s2', n_images=4)])
         self.assertAlmostEqual(m['penetration_mean_mm'], 1.0)
