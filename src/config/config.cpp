@@ -299,6 +299,18 @@ class Table {
         "stage_one_every_n_keyframes");
     integer("stage_one.window_keyframes", 0, 100000, "latest N keyframe poses free (0: all)",
             [f](GeoFusionConfig& c) { return &f(c)->window_keyframes; });
+    flag("stage_one.adapt_noise",
+         "GeoFusion: odometry and per-object measurement noise from the residuals of each solve",
+         [f](GeoFusionConfig& c) { return &f(c)->adapt_noise; });
+    real("stage_one.min_odometry_variance_factor", 1e-6, 1,
+         "... the odometry's variance scaled down to at most this factor",
+         [f](GeoFusionConfig& c) { return &f(c)->min_odometry_variance_factor; });
+    real("stage_one.max_object_variance_factor", 1, 1e6,
+         "... an object's measurement variance scaled up to at most this factor",
+         [f](GeoFusionConfig& c) { return &f(c)->max_object_variance_factor; });
+    real("stage_one.gate_chi2", 1, 1e6,
+         "... a measurement's squared whitened residual beyond this: left out of the next solve",
+         [f](GeoFusionConfig& c) { return &f(c)->gate_chi2; });
   }
   void relations() {
     auto f = [](GeoFusionConfig& c) { return &c.estimator.contacts; };

@@ -91,6 +91,81 @@ bool usable(SolveStatus status) {
          status == SolveStatus::kNothingToSolve;
 }
 
+namespace {
+
+bool validMeasurement(const StageOneMeasurement& m, std::size_t n_kf, std::size_t n_obj) {
+  return m.keyframe >= 0 && m.keyframe < static_cast<int>(n_kf) && m.object >= 0 &&
+         m.object < static_cast<int>(n_obj);
+}
+
+// The object measurement factor of m between the camera and object poses given (a discrete
+// symmetry's equivalent closest to them; a continuous axis left free; a refined measurement tight
+// along its ray), its weights scaled by `s`.
+RelativePoseFactor measurementFactor(const StageOneMeasurement& m, const Eigen::Isometry3d& T_cam,
+                                     const Eigen::Isometry3d& T_obj, const ObjectModel* model,
+                                     const StageOneConfig& config, double s) {
+  Eigen::Isometry3d z = m.T_cam_obj;
+  if (model) {
+    const Eigen::Matrix3d R_pred = (T_cam.inverse() * T_obj).linear();
+    z.linear() = closestSymmetricEquivalent(model->symmetry, R_pred, z.linear());
+  }
+  Eigen::Vector3d axis;
+  const bool free = freeAxis(model, &axis);
+  const Eigen::Matrix3d W_p =
+      m.ray_sigma_m > 0
+          ? rayAlignedSqrtInformation(z.translation(), m.ray_sigma_m,
+                                      config.measurement_sigma_position_m)
+          : Eigen::Matrix3d(Eigen::Matrix3d::Identity() / config.measurement_sigma_position_m);
+  return RelativePoseFactor(z, s * W_p, s / config.measurement_sigma_rotation_rad, free, axis);
+}
+
+RelativePoseFactor odometryFactor(const Eigen::Isometry3d& T_odom_a,
+                                  const Eigen::Isometry3d& T_odom_b, const StageOneConfig& config) {
+  return RelativePoseFactor(T_odom_a.inverse() * T_odom_b, 1.0 / config.odometry_sigma_position_m,
+                            1.0 / config.odometry_sigma_rotation_rad, false,
+                            Eigen::Vector3d::UnitZ());
+}
+
+// Squared norm of a factor's whitened residual at two poses.
+double squaredResidual(const RelativePoseFactor& f, const Eigen::Isometry3d& a,
+                       const Eigen::Isometry3d& b) {
+  const PoseBlock pa = PoseBlock::of(a), pb = PoseBlock::of(b);
+  double r[RelativePoseFactor::kResiduals];
+  f(pa.data(), pb.data(), r);
+  double sum = 0.0;
+  for (double x : r) sum += x * x;
+  return sum;
+}
+
+}  // namespace
+
+StageOneResiduals stageOneResiduals(const std::vector<Eigen::Isometry3d>& T_map_cam,
+                                    const std::vector<Eigen::Isometry3d>& T_odom_cam,
+                                    const std::vector<Eigen::Isometry3d>& T_map_obj,
+                                    const std::vector<const ObjectModel*>& models,
+                                    const std::vector<StageOneMeasurement>& measurements,
+                                    const StageOneConfig& config) {
+  StageOneResiduals out;
+  const std::size_t n_kf = std::min(T_map_cam.size(), T_odom_cam.size());
+  for (std::size_t i = 1; i < n_kf; ++i) {
+    out.odometry.push_back(squaredResidual(odometryFactor(T_odom_cam[i - 1], T_odom_cam[i], config),
+                                           T_map_cam[i - 1], T_map_cam[i]));
+  }
+  const std::size_t n_obj = std::min(T_map_obj.size(), models.size());
+  for (const StageOneMeasurement& m : measurements) {
+    if (!validMeasurement(m, n_kf, n_obj)) {
+      out.measurements.push_back(0.0);
+      continue;
+    }
+    const Eigen::Isometry3d& cam = T_map_cam[static_cast<std::size_t>(m.keyframe)];
+    const Eigen::Isometry3d& obj = T_map_obj[static_cast<std::size_t>(m.object)];
+    out.measurements.push_back(squaredResidual(
+        measurementFactor(m, cam, obj, models[static_cast<std::size_t>(m.object)], config, 1.0),
+        cam, obj));
+  }
+  return out;
+}
+
 StageOneSummary optimizeStageOne(std::vector<Eigen::Isometry3d>* T_map_cam,
                                  const std::vector<Eigen::Isometry3d>& T_odom_cam,
                                  std::vector<Eigen::Isometry3d>* T_map_obj,
@@ -114,45 +189,25 @@ StageOneSummary optimizeStageOne(std::vector<Eigen::Isometry3d>* T_map_cam,
   PoseManifold manifold;
   auto add_pose = [&](PoseBlock& b) { problem.AddParameterBlock(b.data(), 7, &manifold); };
   for (auto& c : cams) add_pose(c);
-  const double wp_odo = 1.0 / config.odometry_sigma_position_m,
-               wq_odo = 1.0 / config.odometry_sigma_rotation_rad;
   for (std::size_t i = 1; i < n_kf; ++i) {
-    const Eigen::Isometry3d rel = T_odom_cam[i - 1].inverse() * T_odom_cam[i];
     auto* cost = new ceres::AutoDiffCostFunction<RelativePoseFactor, 6, 7, 7>(
-        new RelativePoseFactor(rel, wp_odo, wq_odo, false, Eigen::Vector3d::UnitZ()));
+        new RelativePoseFactor(odometryFactor(T_odom_cam[i - 1], T_odom_cam[i], config)));
     problem.AddResidualBlock(cost, makeLoss(config.odometry_loss), cams[i - 1].data(),
                              cams[i].data());
   }
   std::vector<char> used(n_obj, 0);
-  const double wp = 1.0 / config.measurement_sigma_position_m,
-               wq = 1.0 / config.measurement_sigma_rotation_rad;
   for (const StageOneMeasurement& m : measurements) {
-    if (m.keyframe < 0 || m.keyframe >= static_cast<int>(n_kf) || m.object < 0 ||
-        m.object >= static_cast<int>(n_obj) || !(m.weight > 0.0)) {
-      continue;
-    }
+    if (!validMeasurement(m, n_kf, n_obj) || !(m.weight > 0.0)) continue;
     PoseBlock &cam = cams[static_cast<std::size_t>(m.keyframe)],
               &obj = objs[static_cast<std::size_t>(m.object)];
     if (!used[static_cast<std::size_t>(m.object)]) {
       add_pose(obj);
       used[static_cast<std::size_t>(m.object)] = 1;
     }
-    const ObjectModel* model = models[static_cast<std::size_t>(m.object)];
-    Eigen::Isometry3d z = m.T_cam_obj;
-    if (model) {
-      // Discrete symmetry: the equivalent closest to the current estimate.
-      const Eigen::Matrix3d R_pred = (cam.get().inverse() * obj.get()).linear();
-      z.linear() = closestSymmetricEquivalent(model->symmetry, R_pred, z.linear());
-    }
-    Eigen::Vector3d axis;
-    const bool free = freeAxis(model, &axis);
-    const double s = std::sqrt(m.weight);
-    const Eigen::Matrix3d W_p = m.ray_sigma_m > 0
-                                    ? rayAlignedSqrtInformation(z.translation(), m.ray_sigma_m,
-                                                                config.measurement_sigma_position_m)
-                                    : Eigen::Matrix3d(wp * Eigen::Matrix3d::Identity());
-    auto* cost = new ceres::AutoDiffCostFunction<RelativePoseFactor, 6, 7, 7>(
-        new RelativePoseFactor(z, s * W_p, s * wq, free, axis));
+    auto* cost =
+        new ceres::AutoDiffCostFunction<RelativePoseFactor, 6, 7, 7>(new RelativePoseFactor(
+            measurementFactor(m, cam.get(), obj.get(), models[static_cast<std::size_t>(m.object)],
+                              config, std::sqrt(m.weight))));
     problem.AddResidualBlock(cost, makeLoss(config.measurement_loss), cam.data(), obj.data());
   }
   // The first camera fixes the gauge; outside the window the cameras stay where they are.

@@ -60,6 +60,7 @@ MethodStages stagesOf(Method method) {
     case Method::kGeoFusion:
       s.geometric_consistency = s.false_positive_removal = true;
       s.stage_one = s.relations_and_stage_two = s.depth_refinement = true;
+      s.stage_one_noise_adaptation = true;
       break;
   }
   return s;
@@ -125,6 +126,7 @@ void SceneEstimator::reset() {
   tracks_.clear();
   T_map_cam_.clear();
   T_odom_cam_.clear();
+  odometry_variance_ = 1.0;
   stamps_.clear();
   support_ = SupportPlane();
   support_model_.reset();
@@ -482,22 +484,68 @@ StageReport SceneEstimator::runStageOne() {
   std::vector<Eigen::Isometry3d> objects;
   std::vector<const ObjectModel*> models;
   std::vector<StageOneMeasurement> measurements;
+  std::vector<std::pair<std::size_t, std::size_t>> sources;  // (track, observation)
   const std::vector<std::size_t> reported = reportedTracks();
   for (std::size_t i = 0; i < reported.size(); ++i) {
     const Track& tr = tracks_[reported[i]];
     objects.push_back(tr.T_stage_one);
     models.push_back(tr.model.get());
-    for (const Observation& o : tr.observations) {
-      measurements.push_back({o.keyframe, static_cast<int>(i), o.T_cam_obj, 1.0,
+    for (std::size_t k = 0; k < tr.observations.size(); ++k) {
+      const Observation& o = tr.observations[k];
+      const double weight = o.gated ? 0.0 : 1.0 / tr.variance;
+      measurements.push_back({o.keyframe, static_cast<int>(i), o.T_cam_obj, weight,
                               o.refined ? config_.refinement.ray_sigma_m : 0.0});
+      sources.emplace_back(reported[i], k);
     }
   }
+  StageOneConfig config = config_.stage_one;
+  config.odometry_sigma_position_m *= std::sqrt(odometry_variance_);
+  config.odometry_sigma_rotation_rad *= std::sqrt(odometry_variance_);
   const StageOneSummary s =
-      optimizeStageOne(&T_map_cam_, T_odom_cam_, &objects, models, measurements, config_.stage_one);
+      optimizeStageOne(&T_map_cam_, T_odom_cam_, &objects, models, measurements, config);
   if (s.solved) {
     for (std::size_t i = 0; i < reported.size(); ++i) tracks_[reported[i]].T_stage_one = objects[i];
+    if (stages_.stage_one_noise_adaptation && config_.stage_one.adapt_noise)
+      adaptNoise(reported, objects, models, measurements, sources);
   }
   return {s.status, s.iterations, s.initial_cost, s.final_cost};
+}
+
+// Variance component estimation from the residuals of the solve (under the configured noise):
+// the odometry's variance factor from the median over its factors (tighter only), each object's
+// from the median over its measurements (looser only); a measurement beyond the gate under its
+// object's noise is left out of the next solve. Medians of chi-square(6) residuals, 5.35 when the
+// configured noise is right.
+void SceneEstimator::adaptNoise(const std::vector<std::size_t>& reported,
+                                const std::vector<Eigen::Isometry3d>& objects,
+                                const std::vector<const ObjectModel*>& models,
+                                const std::vector<StageOneMeasurement>& measurements,
+                                const std::vector<std::pair<std::size_t, std::size_t>>& sources) {
+  const StageOneConfig& c = config_.stage_one;
+  constexpr double kMedianChi2of6 = 5.35;
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  std::vector<StageOneMeasurement> unit = measurements;
+  for (StageOneMeasurement& m : unit) m.weight = 1.0;
+  const StageOneResiduals r = stageOneResiduals(T_map_cam_, T_odom_cam_, objects, models, unit, c);
+  if (!r.odometry.empty()) {
+    odometry_variance_ =
+        std::clamp(median(r.odometry) / kMedianChi2of6, c.min_odometry_variance_factor, 1.0);
+  }
+  std::vector<std::vector<double>> per_object(reported.size());
+  for (std::size_t i = 0; i < measurements.size(); ++i)
+    per_object[static_cast<std::size_t>(measurements[i].object)].push_back(r.measurements[i]);
+  for (std::size_t j = 0; j < reported.size(); ++j) {
+    if (per_object[j].empty()) continue;
+    tracks_[reported[j]].variance =
+        std::clamp(median(per_object[j]) / kMedianChi2of6, 1.0, c.max_object_variance_factor);
+  }
+  for (std::size_t i = 0; i < measurements.size(); ++i) {
+    Track& tr = tracks_[sources[i].first];
+    tr.observations[sources[i].second].gated = r.measurements[i] / tr.variance > c.gate_chi2;
+  }
 }
 
 StageReport SceneEstimator::runRelationsAndStageTwo(const Keyframe* kf, StageTimings* timings) {

@@ -33,6 +33,17 @@ struct StageOneConfig {
   /// Only the latest N keyframe poses are free (older ones fixed, their measurements still
   /// constrain the objects); 0 = all. Bounds the time of a run on long sequences.
   int window_keyframes = 60;
+  /// Noise adaptation (GeoFusion; variance component estimation from the residuals of each
+  /// solve, used by the next): the odometry's variance scaled by a factor in
+  /// [min_odometry_variance_factor, 1] (tighter only), each object's measurement variance by a
+  /// factor in [1, max_object_variance_factor] (looser only), and a measurement whose squared
+  /// whitened residual under its object's noise exceeds gate_chi2 (6 dof) left out of the next
+  /// solve. An object whose detections carry a bias that changes with the viewpoint then cannot
+  /// drag the cameras.
+  bool adapt_noise = true;
+  double min_odometry_variance_factor = 0.01;
+  double max_object_variance_factor = 100.0;
+  double gate_chi2 = 22.5;
 };
 
 /// One object measurement z_t^k in stage I: keyframe t observes object j at T_cam_obj.
@@ -81,6 +92,19 @@ StageOneSummary optimizeStageOne(std::vector<Eigen::Isometry3d>* T_map_cam,
                                  const std::vector<const ObjectModel*>& models,
                                  const std::vector<StageOneMeasurement>& measurements,
                                  const StageOneConfig& config);
+
+/// Squared whitened residuals (unit weight, no robust loss) of stage I's factors at the given
+/// poses: one per odometry factor (keyframes i - 1, i) and one per measurement, in order (0 for a
+/// measurement that refers to no keyframe or object). The estimator's noise adaptation reads them.
+struct StageOneResiduals {
+  std::vector<double> odometry, measurements;
+};
+StageOneResiduals stageOneResiduals(const std::vector<Eigen::Isometry3d>& T_map_cam,
+                                    const std::vector<Eigen::Isometry3d>& T_odom_cam,
+                                    const std::vector<Eigen::Isometry3d>& T_map_obj,
+                                    const std::vector<const ObjectModel*>& models,
+                                    const std::vector<StageOneMeasurement>& measurements,
+                                    const StageOneConfig& config);
 
 struct StageTwoConfig {
   double prior_sigma_position_m = 0.01;  ///< object prior factor (from stage I)

@@ -55,6 +55,7 @@ struct MethodStages {
   bool geometric_consistency = false;       ///< f_gc scores (else the detector's score)
   bool false_positive_removal = false;      ///< and merging of overlapping objects
   bool stage_one = false;                   ///< camera and object poses in the factor graph
+  bool stage_one_noise_adaptation = false;  ///< noise scales from the residuals (not the paper)
   bool relations_and_stage_two = false;     ///< contacts and stage II (reported poses: stage II)
 };
 MethodStages stagesOf(Method method);
@@ -189,6 +190,7 @@ class SceneEstimator {
     Eigen::Isometry3d T_cam_obj = Eigen::Isometry3d::Identity();
     double consistency = 0.0;  ///< f_gc (B-SLAM: the detector score)
     bool refined = false;      ///< depth-refined: tight along the ray in stage I
+    bool gated = false;        ///< left out of stage I (residual beyond the gate)
   };
   struct Track {
     int id = -1;
@@ -199,6 +201,7 @@ class SceneEstimator {
     double best_consistency = 0.0;
     int first_keyframe = -1, last_keyframe = -1;
     bool confirmed = false;  ///< false-positive score at most eps_fp: part of the map
+    double variance = 1.0;   ///< stage I measurement variance factor (noise adaptation)
     Eigen::Vector3d box_centre = Eigen::Vector3d::Zero();  ///< model-frame bounding box
     Eigen::Vector3d box_half = Eigen::Vector3d::Zero();
   };
@@ -237,6 +240,11 @@ class SceneEstimator {
   void mergeOverlapping(std::vector<int>* removed);
   bool stageOneDue(int t) const;
   StageReport runStageOne();
+  void adaptNoise(const std::vector<std::size_t>& reported,
+                  const std::vector<Eigen::Isometry3d>& objects,
+                  const std::vector<const ObjectModel*>& models,
+                  const std::vector<StageOneMeasurement>& measurements,
+                  const std::vector<std::pair<std::size_t, std::size_t>>& sources);
   StageReport runRelationsAndStageTwo(const Keyframe* keyframe, StageTimings* timings);
   KeyframeResult result(int keyframe, double stamp) const;
 
@@ -250,6 +258,7 @@ class SceneEstimator {
   std::vector<Track> tracks_;
   int next_id_ = 0;
   std::vector<Eigen::Isometry3d> T_map_cam_, T_odom_cam_;
+  double odometry_variance_ = 1.0;  ///< stage I odometry variance factor (noise adaptation)
   std::vector<double> stamps_;
   SupportPlane support_;
   std::shared_ptr<ObjectModel> support_model_;
