@@ -30,6 +30,7 @@ class Table {
     refinement();
     monitor();
     association();
+    lifecycle();
     stageOne();
     relations();
     stageTwo();
@@ -237,6 +238,19 @@ class Table {
          [f](GeoFusionConfig& c) { return &f(c)->inconsistent_below; });
     real("monitor.warn_share", 0, 1, "warn when at least this share of them is rejected",
          [f](GeoFusionConfig& c) { return &f(c)->warn_share; });
+  }
+  void lifecycle() {
+    auto f = [](GeoFusionConfig& c) { return &c.estimator.lifecycle; };
+    real("lifecycle.free_space_outlier_ratio", 0, 1,
+         "a mapped object not detected is gone where this share of its surface shows free space",
+         [f](GeoFusionConfig& c) { return &f(c)->free_space_outlier_ratio; });
+    real("lifecycle.max_occlusion_ratio", 0, 1, "... with at most this share of it hidden",
+         [f](GeoFusionConfig& c) { return &f(c)->max_occlusion_ratio; });
+    real("lifecycle.seen_inlier_ratio", 0, 1, "this share of its surface seen: the count restarts",
+         [f](GeoFusionConfig& c) { return &f(c)->seen_inlier_ratio; });
+    integer("lifecycle.free_space_keyframes", 1, 10000,
+            "... removed after this many keyframes in a row showing free space",
+            [f](GeoFusionConfig& c) { return &f(c)->free_space_keyframes; });
   }
   void association() {
     auto f = [](GeoFusionConfig& c) { return &c.estimator.association; };

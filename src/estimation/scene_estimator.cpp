@@ -60,7 +60,7 @@ MethodStages stagesOf(Method method) {
     case Method::kGeoFusion:
       s.geometric_consistency = s.false_positive_removal = true;
       s.stage_one = s.relations_and_stage_two = s.depth_refinement = true;
-      s.stage_one_noise_adaptation = true;
+      s.stage_one_noise_adaptation = s.free_space_removal = true;
       break;
   }
   return s;
@@ -197,6 +197,7 @@ KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
     for (int id : detection_object)
       if (id >= 0) touched.push_back(id);
     removeFalsePositives(touched, t, &removed);
+    if (stages_.free_space_removal) removeObjectsSeenAbsent(kf, touched, &removed);
     mergeOverlapping(&removed);
     for (int& id : detection_object) {
       if (std::find(removed.begin(), removed.end(), id) != removed.end()) id = -1;
@@ -426,6 +427,36 @@ void SceneEstimator::removeFalsePositives(const std::vector<int>& touched, int k
     } else {
       kept.push_back(std::move(tr));
     }
+  }
+  tracks_ = std::move(kept);
+}
+
+// Objects the depth image shows gone: a confirmed object in view that no detection measured is
+// rendered at its pose; free space over its visible, unoccluded surface for
+// lifecycle.free_space_keyframes keyframes in a row removes it (LifecycleConfig).
+void SceneEstimator::removeObjectsSeenAbsent(const Keyframe& kf, const std::vector<int>& measured,
+                                             std::vector<int>* removed) {
+  if (!kf.depth.data) return;
+  const LifecycleConfig& c = config_.lifecycle;
+  const Eigen::Isometry3d T_cam_map = T_map_cam_.back().inverse();
+  std::vector<Track> kept;
+  for (Track& tr : tracks_) {
+    const bool was_measured = std::find(measured.begin(), measured.end(), tr.id) != measured.end();
+    if (was_measured) tr.free_space_keyframes = 0;
+    if (tr.confirmed && !was_measured) {
+      const ConsistencyResult seen =
+          scorer_->score(tr.model, T_cam_map * reportedPose(tr), kf.depth, kf.K);
+      if (seen.determined && seen.r_occ <= c.max_occlusion_ratio) {
+        if (seen.r_out >= c.free_space_outlier_ratio)
+          ++tr.free_space_keyframes;
+        else if (seen.r_in >= c.seen_inlier_ratio)
+          tr.free_space_keyframes = 0;
+      }
+    }
+    if (tr.free_space_keyframes >= std::max(1, c.free_space_keyframes))
+      removed->push_back(tr.id);
+    else
+      kept.push_back(std::move(tr));
   }
   tracks_ = std::move(kept);
 }

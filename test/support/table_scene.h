@@ -34,6 +34,7 @@ inline Eigen::Isometry3d pose(const Eigen::Vector3d& t, double yaw = 0.0) {
 struct PlacedObject {
   std::shared_ptr<const ObjectModel> model;
   Eigen::Isometry3d T_world_obj;
+  bool hidden = false;  ///< taken away: not in the observed depth
 };
 
 /// A table (top at world z = 0) with objects standing on it, seen by a Carmine-like camera 0.8 m
@@ -71,6 +72,7 @@ class TableScene {
     table.instance_id = 1000;
     items.push_back(table);
     for (std::size_t i = 0; i < objects_.size(); ++i) {
+      if (objects_[i].hidden) continue;
       RenderItem it;
       it.mesh = handle(objects_[i].model);
       it.T_cam_model = cameraPose(static_cast<int>(i));
@@ -115,6 +117,9 @@ class TableScene {
   }
 
   const PlacedObject& object(int i) const { return objects_[i]; }
+  /// Takes object i away (or puts it back); renderObserved() shows the change.
+  void setHidden(int i, bool hidden) { objects_[i].hidden = hidden; }
+  void move(int i, const Eigen::Isometry3d& T_world_obj) { objects_[i].T_world_obj = T_world_obj; }
   RenderedImages& observed() { return observed_; }
   const PinholeIntrinsics& K() const { return K_; }
   const Eigen::Isometry3d& T_world_cam() const { return T_world_cam_; }

@@ -56,15 +56,30 @@ struct MethodStages {
   bool false_positive_removal = false;      ///< and merging of overlapping objects
   bool stage_one = false;                   ///< camera and object poses in the factor graph
   bool stage_one_noise_adaptation = false;  ///< noise scales from the residuals (not the paper)
+  bool free_space_removal = false;          ///< objects the depth shows gone are removed
   bool relations_and_stage_two = false;     ///< contacts and stage II (reported poses: stage II)
 };
 MethodStages stagesOf(Method method);
+
+/// When a mapped object is gone (picked up, moved): only on evidence. A confirmed object in view
+/// that no detection measured is rendered at its pose against the depth image; when at least
+/// free_space_outlier_ratio of its visible surface shows the observed surface behind it (free
+/// space where it should be), while at most max_occlusion_ratio of it is hidden, for
+/// free_space_keyframes keyframes in a row, it leaves the map. A keyframe that sees its surface
+/// (inlier ratio at least seen_inlier_ratio) resets the count; not being detected never removes it.
+struct LifecycleConfig {
+  double free_space_outlier_ratio = 0.5;
+  double max_occlusion_ratio = 0.5;
+  double seen_inlier_ratio = 0.5;
+  int free_space_keyframes = 3;
+};
 
 struct EstimatorConfig {
   Method method = Method::kGeoFusion;
   ConsistencyConfig consistency;
   DepthRefinementConfig refinement;  ///< used by the methods whose stages include it
   DetectionMonitorConfig monitor;    ///< when most detections are rejected, say why
+  LifecycleConfig lifecycle;         ///< removal of confirmed objects (GeoFusion)
   AssociationConfig association;
   StageOneConfig stage_one;
   ContactConfig contacts;
@@ -200,8 +215,9 @@ class SceneEstimator {
     std::vector<Observation> observations;
     double best_consistency = 0.0;
     int first_keyframe = -1, last_keyframe = -1;
-    bool confirmed = false;  ///< false-positive score at most eps_fp: part of the map
-    double variance = 1.0;   ///< stage I measurement variance factor (noise adaptation)
+    bool confirmed = false;        ///< false-positive score at most eps_fp: part of the map
+    double variance = 1.0;         ///< stage I measurement variance factor (noise adaptation)
+    int free_space_keyframes = 0;  ///< keyframes in a row showing free space where it should be
     Eigen::Vector3d box_centre = Eigen::Vector3d::Zero();  ///< model-frame bounding box
     Eigen::Vector3d box_half = Eigen::Vector3d::Zero();
   };
@@ -238,6 +254,8 @@ class SceneEstimator {
   void removeFalsePositives(const std::vector<int>& touched, int keyframe,
                             std::vector<int>* removed);
   void mergeOverlapping(std::vector<int>* removed);
+  void removeObjectsSeenAbsent(const Keyframe& keyframe, const std::vector<int>& measured,
+                               std::vector<int>* removed);
   bool stageOneDue(int t) const;
   StageReport runStageOne();
   void adaptNoise(const std::vector<std::size_t>& reported,

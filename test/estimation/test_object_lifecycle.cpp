@@ -1,0 +1,112 @@
+// Objects kept and removed on evidence (issue 20), on a rendered tabletop with the benchmark's
+// depth noise: a mapped object that is no longer detected but still seen stays; taken away (free
+// space where it was), it leaves the map within a few keyframes; moved, it is mapped where it now
+// is and not where it was.
+#include "geofusion/estimation/scene_estimator.h"
+#include "geofusion/model/object_model.h"
+
+#include "table_scene.h"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <vector>
+
+namespace geofusion {
+namespace {
+
+using test::TableScene;
+
+class ObjectLifecycleTest : public ::testing::Test {
+ protected:
+  ObjectLifecycleTest() : models(ModelSet::builtinPrimitives()), scene(models) {
+    box = scene.place("003_cracker_box", -0.12, 0.06, 0.3);
+    brick = scene.place("061_foam_brick", 0.12, -0.04, -0.2);
+    can = scene.place("005_tomato_soup_can", 0.02, 0.14);
+    scene.renderObserved();
+    estimator = std::make_unique<SceneEstimator>(models, EstimatorConfig(), test::sharedRenderer());
+  }
+
+  // One keyframe from the fixed camera, the listed objects detected at their true poses.
+  KeyframeResult step(const std::vector<int>& detected) {
+    Keyframe kf;
+    kf.stamp_s = t++;
+    kf.T_odom_cam = scene.T_world_cam();
+    kf.K = scene.K();
+    kf.depth = scene.depth();
+    for (int i : detected) {
+      ObjectMeasurement m;
+      m.class_name = scene.object(i).model->name;
+      m.score = 0.9;
+      m.T_cam_obj = scene.cameraPose(i);
+      kf.detections.push_back(m);
+    }
+    return estimator->addKeyframe(kf);
+  }
+
+  // The map has an object of object i's class within 2 cm of `T_world` (the map frame is the
+  // world: the odometry is the true camera).
+  static bool mappedAt(const KeyframeResult& r, const std::string& name,
+                       const Eigen::Isometry3d& T_world) {
+    for (const ObjectEstimate& o : r.objects)
+      if (o.model->name == name &&
+          (o.T_map_obj.translation() - T_world.translation()).norm() < 0.02)
+        return true;
+    return false;
+  }
+  bool mapped(const KeyframeResult& r, int i) const {
+    return mappedAt(r, scene.object(i).model->name, scene.object(i).T_world_obj);
+  }
+
+  ModelSet models;
+  TableScene scene;
+  int box = -1, brick = -1, can = -1;
+  std::unique_ptr<SceneEstimator> estimator;
+  int t = 0;
+};
+
+TEST_F(ObjectLifecycleTest, AnObjectSeenButNotDetectedStays) {
+  KeyframeResult r;
+  for (int k = 0; k < 5; ++k) r = step({box, brick, can});
+  ASSERT_TRUE(mapped(r, box) && mapped(r, brick) && mapped(r, can));
+  // The detector stops reporting the brick for 50 keyframes; the depth still shows it.
+  for (int k = 0; k < 50; ++k) {
+    r = step({box, can});
+    ASSERT_TRUE(mapped(r, brick)) << "keyframe " << k;
+  }
+}
+
+TEST_F(ObjectLifecycleTest, AnObjectTakenAwayLeavesTheMapWithinFiveKeyframes) {
+  KeyframeResult r;
+  for (int k = 0; k < 5; ++k) r = step({box, brick, can});
+  ASSERT_TRUE(mapped(r, brick));
+  scene.setHidden(brick, true);  // picked up: the table shows where it stood
+  scene.renderObserved();
+  int gone_after = -1;
+  for (int k = 1; k <= 10 && gone_after < 0; ++k) {
+    r = step({box, can});
+    if (!mapped(r, brick)) gone_after = k;
+  }
+  EXPECT_GE(gone_after, 1);
+  EXPECT_LE(gone_after, 5);
+  EXPECT_TRUE(mapped(r, box) && mapped(r, can));  // the others stay
+}
+
+TEST_F(ObjectLifecycleTest, AMovedObjectIsMappedWhereItIsNotWhereItWas) {
+  KeyframeResult r;
+  for (int k = 0; k < 5; ++k) r = step({box, brick, can});
+  const Eigen::Isometry3d old_pose = scene.object(brick).T_world_obj;
+  Eigen::Isometry3d new_pose = old_pose;
+  new_pose.translation() += Eigen::Vector3d(0.0, 0.15, 0.0);
+  scene.move(brick, new_pose);
+  scene.renderObserved();
+  for (int k = 0; k < 6; ++k) r = step({box, brick, can});
+  EXPECT_TRUE(mapped(r, brick));  // at its new pose
+  EXPECT_FALSE(mappedAt(r, scene.object(brick).model->name, old_pose)) << "a ghost is left";
+  int bricks = 0;
+  for (const ObjectEstimate& o : r.objects) bricks += o.model->name == "061_foam_brick";
+  EXPECT_EQ(bricks, 1);
+}
+
+}  // namespace
+}  // namespace geofusion
