@@ -461,6 +461,16 @@ void SceneEstimator::removeObjectsSeenAbsent(const Keyframe& kf, const std::vect
   tracks_ = std::move(kept);
 }
 
+namespace {
+// How much the depth supported an object over all its measurements: the sum of their f_gc.
+template <typename TrackT>
+double depthEvidence(const TrackT& track) {
+  double sum = 0.0;
+  for (const auto& o : track.observations) sum += o.consistency;
+  return sum;
+}
+}  // namespace
+
 void SceneEstimator::mergeOverlapping(std::vector<int>* removed) {
   bool merged = true;
   while (merged) {
@@ -481,12 +491,16 @@ void SceneEstimator::mergeOverlapping(std::vector<int>* removed) {
                                        config_.association.merge_thin_fraction * thinnest);
         if (collider_->penetration(A.model, reportedPose(A), B.model, reportedPose(B)) < needed)
           continue;
-        const double fa = falsePositiveScore(A.best_consistency,
-                                             static_cast<int>(A.observations.size())),
-                     fb = falsePositiveScore(B.best_consistency,
-                                             static_cast<int>(B.observations.size()));
-        // The one with the higher false-positive score goes into the other.
-        const std::size_t keep = fa <= fb ? a : b, drop = fa <= fb ? b : a;
+        // Two of one class: the one with the higher false-positive score goes into the other (the
+        // paper). Two classes (a look-alike reported for a stretch, a persistent phantom beside a
+        // real object): the one the depth supported more over all its measurements stays.
+        const bool keep_a =
+            A.model->name == B.model->name
+                ? falsePositiveScore(A.best_consistency, static_cast<int>(A.observations.size())) <=
+                      falsePositiveScore(B.best_consistency,
+                                         static_cast<int>(B.observations.size()))
+                : depthEvidence(A) >= depthEvidence(B);
+        const std::size_t keep = keep_a ? a : b, drop = keep_a ? b : a;
         Track &K = tracks_[keep], &D = tracks_[drop];
         if (K.model->name == D.model->name) {
           // Keep one measurement per keyframe: the kept object's own wins.
