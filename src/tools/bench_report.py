@@ -980,7 +980,9 @@ def write_report(summary, out_dir, figures, command):
                                ('precision50', 'precision (IoU 0.5, score 0.5)', 3),
                                ('recall50', 'recall (IoU 0.5, score 0.5)', 3),
                                ('adds_under_1cm', 'ADD-S < 1 cm share', 3),
-                               ('contact_f1', 'contact F1', 3)):
+                               ('contact_f1', 'contact F1', 3),
+                               ('ate_mm', 'camera ATE (mm)', 1),
+                               ('odometry_ate_mm', 'ATE of the odometry given (mm)', 1)):
         rows = [[s] + [_num((scenes[s].get(n) or {}).get(key), digits) if n in scenes[s]
                        else '-' for n in names] for s in scenes]
         md += ['### %s' % label, ''] + _table(['scene'] + names, rows) + ['']

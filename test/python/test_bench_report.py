@@ -407,6 +407,7 @@ class MainTest(unittest.TestCase):
         with open(os.path.join(self.out, 'report.md')) as f:
             report = f.read()
         for text in ('Table I', 'Table II', 'Targets', 'abc1234', '73.4', '0.99',
+                     '### camera ATE (mm)', '### ATE of the odometry given (mm)',
                      '](adds_curve.png)', '](timing_s2.png)', '](contact_graph_s2.png)',
                      'n/a'):
             self.assertIn(text, report)
