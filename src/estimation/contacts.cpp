@@ -268,4 +268,20 @@ std::vector<FeatureContact> findAllContacts(const std::vector<PosedModel>& objec
   return out;
 }
 
+std::vector<FeatureContact> onePerPairAndType(const std::vector<FeatureContact>& contacts) {
+  std::vector<FeatureContact> out;
+  for (const FeatureContact& c : contacts) {
+    const auto same = std::find_if(out.begin(), out.end(), [&](const FeatureContact& o) {
+      return o.type == c.type &&
+             std::min(o.object_a, o.object_b) == std::min(c.object_a, c.object_b) &&
+             std::max(o.object_a, o.object_b) == std::max(c.object_a, c.object_b);
+    });
+    if (same == out.end())
+      out.push_back(c);
+    else if (std::abs(c.distance_residual) < std::abs(same->distance_residual))
+      *same = c;
+  }
+  return out;
+}
+
 }  // namespace geofusion

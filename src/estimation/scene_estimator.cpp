@@ -171,7 +171,7 @@ KeyframeResult SceneEstimator::result(int keyframe, double stamp) const {
   r.stamp_s = stamp;
   if (!T_map_cam_.empty()) r.T_map_cam = T_map_cam_.back();
   r.objects = objects();
-  if (stages_.relations_and_stage_two) r.contacts = contacts_;
+  if (stages_.relations_and_stage_two) r.contacts = onePerPairAndType(contacts_);
   return r;
 }
 

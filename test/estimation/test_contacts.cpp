@@ -13,6 +13,27 @@ using namespace test;  // NOLINT: the shared test helpers
 
 const Eigen::Vector3d kGravity(0, 0, -1);
 
+// Two feature pairs of one object pair and type are one contact to the user (the closer one);
+// another type or another pair stays.
+TEST(Contacts, OnePerPairAndTypeKeepsTheClosest) {
+  FeatureContact a;
+  a.object_a = -1, a.object_b = 2, a.type = ContactType::kPlanePlane, a.distance_residual = 0.004;
+  FeatureContact b = a;
+  b.distance_residual = -0.001;  // the closer one
+  FeatureContact c = a;
+  c.type = ContactType::kPlaneCurve;
+  FeatureContact d = a;
+  d.object_a = 3, d.object_b = 2;
+  FeatureContact e = b;
+  std::swap(e.object_a, e.object_b);  // the same pair the other way round
+  e.distance_residual = 0.002;
+  const std::vector<FeatureContact> out = onePerPairAndType({a, b, c, d, e});
+  ASSERT_EQ(out.size(), 3u);
+  EXPECT_DOUBLE_EQ(out[0].distance_residual, -0.001);
+  EXPECT_EQ(out[1].type, ContactType::kPlaneCurve);
+  EXPECT_EQ(out[2].object_a, 3);
+}
+
 TEST(Contacts, BoxOnTableIsOnePlanePlaneSupport) {
   const ObjectModel table = boxModel(1.0, 1.0, 0.04), box = boxModel(0.1, 0.16, 0.2);
   // Table top at z = 0; the box rests on it with a 1 mm gap (as physics leaves it).

@@ -70,6 +70,11 @@ std::vector<FeatureContact> findAllContacts(const std::vector<PosedModel>& objec
                                             const Eigen::Vector3d& gravity,
                                             const ContactConfig& config = ContactConfig());
 
+/// The contacts a user sees (results, markers, map messages): one per object pair and contact
+/// type, the one whose distance residual is smallest in magnitude. Stage II keeps every feature
+/// pair; two planar facets of a clamp on the table are one contact to the user.
+std::vector<FeatureContact> onePerPairAndType(const std::vector<FeatureContact>& contacts);
+
 /// Whether the convex outlines of two point sets, projected along `direction`, overlap by at
 /// least `min_overlap` (separating axis theorem; two points make a segment, one a point). Along
 /// an axis across which both outlines have no width, they need only meet within `line_tolerance`.
