@@ -107,8 +107,7 @@ double alongRay(const Eigen::Vector3d& p, const DepthImageView& depth, const Pin
   const float z = depth.at(u, v);
   if (!(z > 0.f) || !std::isfinite(z)) return nan;
   if (observed) *observed = K.backProject(u, v, z);
-  const double rx = (uv.x() - K.cx) / K.fx, ry = (uv.y() - K.cy) / K.fy;
-  return (z - p.z()) * std::sqrt(1.0 + rx * rx + ry * ry);
+  return distanceAlongRay(K, uv.x(), uv.y(), z, p.z());
 }
 
 // Where most of the visible surface meets the observed one along the ray: the centre of the
@@ -231,7 +230,7 @@ DepthRefinement DepthRefiner::refine(const std::shared_ptr<const ObjectModel>& m
   out.ray_offset_m = std::numeric_limits<double>::quiet_NaN();
   const RenderedImages* rendered = depth.data ? scorer_->render(model, T_cam_obj, K) : nullptr;
   if (!rendered) {
-    out.before = out.after = scorer_->score(model, T_cam_obj, depth, K);  // undetermined
+    out.before = out.after = undeterminedResult(scorer_->config());
     return out;
   }
   out.before = out.after = compareDepth(*rendered, depth, K, scorer_->config());

@@ -1,5 +1,6 @@
 #include "geofusion/estimation/detection_monitor.h"
 
+#include "geofusion/common/statistics.h"
 #include "geofusion/estimation/scene_estimator.h"
 
 #include <algorithm>
@@ -10,16 +11,10 @@ namespace geofusion {
 
 namespace {
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 // The likely cause, from where the rejected detections lie against the observed surface.
 std::string causeOf(const std::vector<double>& offsets_m) {
   if (offsets_m.size() < 5) return "check the depth image and the detector";
-  const double m = median(offsets_m);
+  const double m = percentile(offsets_m, 0.5);
   char text[200];
   if (std::abs(m) < 0.01) {
     std::snprintf(text, sizeof(text),

@@ -1,5 +1,6 @@
 #include "geofusion/estimation/scene_estimator.h"
 
+#include "geofusion/common/statistics.h"
 #include "geofusion/model/collision.h"
 #include "geofusion/render/consistency.h"
 #include "geofusion/render/renderer.h"
@@ -461,15 +462,11 @@ void SceneEstimator::removeObjectsSeenAbsent(const Keyframe& kf, const std::vect
   tracks_ = std::move(kept);
 }
 
-namespace {
-// How much the depth supported an object over all its measurements: the sum of their f_gc.
-template <typename TrackT>
-double depthEvidence(const TrackT& track) {
+double SceneEstimator::Track::depthEvidence() const {
   double sum = 0.0;
-  for (const auto& o : track.observations) sum += o.consistency;
+  for (const Observation& o : observations) sum += o.consistency;
   return sum;
 }
-}  // namespace
 
 void SceneEstimator::mergeOverlapping(std::vector<int>* removed) {
   bool merged = true;
@@ -499,7 +496,7 @@ void SceneEstimator::mergeOverlapping(std::vector<int>* removed) {
                 ? falsePositiveScore(A.best_consistency, static_cast<int>(A.observations.size())) <=
                       falsePositiveScore(B.best_consistency,
                                          static_cast<int>(B.observations.size()))
-                : depthEvidence(A) >= depthEvidence(B);
+                : A.depthEvidence() >= B.depthEvidence();
         const std::size_t keep = keep_a ? a : b, drop = keep_a ? b : a;
         Track &K = tracks_[keep], &D = tracks_[drop];
         if (K.model->name == D.model->name) {
@@ -568,24 +565,20 @@ void SceneEstimator::adaptNoise(const std::vector<std::size_t>& reported,
                                 const std::vector<std::pair<std::size_t, std::size_t>>& sources) {
   const StageOneConfig& c = config_.stage_one;
   constexpr double kMedianChi2of6 = 5.35;
-  auto median = [](std::vector<double> v) {
-    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-    return v[v.size() / 2];
-  };
   std::vector<StageOneMeasurement> unit = measurements;
   for (StageOneMeasurement& m : unit) m.weight = 1.0;
   const StageOneResiduals r = stageOneResiduals(T_map_cam_, T_odom_cam_, objects, models, unit, c);
   if (!r.odometry.empty()) {
-    odometry_variance_ =
-        std::clamp(median(r.odometry) / kMedianChi2of6, c.min_odometry_variance_factor, 1.0);
+    odometry_variance_ = std::clamp(percentile(r.odometry, 0.5) / kMedianChi2of6,
+                                    c.min_odometry_variance_factor, 1.0);
   }
   std::vector<std::vector<double>> per_object(reported.size());
   for (std::size_t i = 0; i < measurements.size(); ++i)
     per_object[static_cast<std::size_t>(measurements[i].object)].push_back(r.measurements[i]);
   for (std::size_t j = 0; j < reported.size(); ++j) {
     if (per_object[j].empty()) continue;
-    tracks_[reported[j]].variance =
-        std::clamp(median(per_object[j]) / kMedianChi2of6, 1.0, c.max_object_variance_factor);
+    tracks_[reported[j]].variance = std::clamp(percentile(per_object[j], 0.5) / kMedianChi2of6, 1.0,
+                                               c.max_object_variance_factor);
   }
   for (std::size_t i = 0; i < measurements.size(); ++i) {
     Track& tr = tracks_[sources[i].first];

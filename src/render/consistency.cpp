@@ -21,6 +21,12 @@ double ModifiedSigmoid::operator()(double x) const {
   return std::clamp((logistic(steepness * (x - centre)) - lo) / (hi - lo), 0.0, 1.0);
 }
 
+ConsistencyResult undeterminedResult(const ConsistencyConfig& config) {
+  ConsistencyResult r;
+  r.score = config.undetermined_score;
+  return r;
+}
+
 ConsistencyResult compareDepth(const RenderedImages& rendered, const DepthImageView& observed,
                                const PinholeIntrinsics& K, const ConsistencyConfig& config) {
   ConsistencyResult r;
@@ -33,7 +39,6 @@ ConsistencyResult compareDepth(const RenderedImages& rendered, const DepthImageV
   if (inside) {
     for (int y = 0; y < box.height; y += stride) {
       const int v = box.y + y;
-      const double ry = (v - K.cy) / K.fy;
       const float* row = rendered.depth.data() + static_cast<std::size_t>(y) * box.width;
       for (int x = 0; x < box.width; x += stride) {
         const float z_model = row[x];
@@ -45,10 +50,7 @@ ConsistencyResult compareDepth(const RenderedImages& rendered, const DepthImageV
           ++r.missing;
           continue;
         }
-        // Signed distance along the ray: positive when the observed surface is behind the model.
-        const double rx = (u - K.cx) / K.fx;
-        const double along =
-            (static_cast<double>(z_obs) - z_model) * std::sqrt(1.0 + rx * rx + ry * ry);
+        const double along = distanceAlongRay(K, u, v, z_obs, z_model);
         if (along < -config.eps_res) {
           ++r.occluded;
         } else if (along <= config.eps_res) {
@@ -111,12 +113,7 @@ ConsistencyResult ConsistencyScorer::score(const std::shared_ptr<const ObjectMod
                                            const DepthImageView& observed,
                                            const PinholeIntrinsics& K) {
   const RenderedImages* rendered = render(model, T_cam_model, K);
-  if (!rendered) {
-    ConsistencyResult undetermined;
-    undetermined.score = config_.undetermined_score;
-    return undetermined;
-  }
-  return compareDepth(*rendered, observed, K, config_);
+  return rendered ? compareDepth(*rendered, observed, K, config_) : undeterminedResult(config_);
 }
 
 }  // namespace geofusion

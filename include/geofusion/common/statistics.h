@@ -1,4 +1,4 @@
-// Small statistics the benchmarks and tools print.
+// Small statistics: what the benchmarks and tools print, the medians the estimator takes.
 #pragma once
 
 #include <algorithm>

@@ -220,6 +220,8 @@ class SceneEstimator {
     int free_space_keyframes = 0;  ///< keyframes in a row showing free space where it should be
     Eigen::Vector3d box_centre = Eigen::Vector3d::Zero();  ///< model-frame bounding box
     Eigen::Vector3d box_half = Eigen::Vector3d::Zero();
+    /// How much the depth supported it over all its measurements: the sum of their f_gc.
+    double depthEvidence() const;
   };
 
   /// The keyframe's detections with the models of their classes and their scores.

@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 
+#include <cmath>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -62,6 +63,19 @@ struct ConsistencyResult {
   double score = 0.0;       ///< f_gc in [0, 1]
   bool determined = false;  ///< false: too few observed points; score = undetermined_score
 };
+
+/// The result of a comparison that cannot be made (nothing rendered, no depth): undetermined,
+/// scored config.undetermined_score.
+ConsistencyResult undeterminedResult(const ConsistencyConfig& config);
+
+/// Signed distance along the ray of pixel (u, v) from a model surface at depth z_model to the
+/// observed surface at depth z_observed (depths along the optical axis; positive: the observed
+/// surface is behind the model).
+inline double distanceAlongRay(const PinholeIntrinsics& K, double u, double v, double z_observed,
+                               double z_model) {
+  const double rx = (u - K.cx) / K.fx, ry = (v - K.cy) / K.fy;
+  return (z_observed - z_model) * std::sqrt(1.0 + rx * rx + ry * ry);
+}
 
 /// Compares a rendering of one model (depth > 0 where it was drawn) with the observed depth.
 /// The rendered region must lie inside the observed image.
