@@ -339,13 +339,27 @@ class Table {
          [f](GeoFusionConfig& c) { return &f(c)->eps_c_pc; });
     real(p + "eps_c_cc", 0, 0.1, "C2C: axis distance minus the radii below this, m",
          [f](GeoFusionConfig& c) { return &f(c)->eps_c_cc; });
+    real(p + "eps_c_pe", 0, 0.1, "P2E: the other hull's nearest point within this of the plane, m",
+         [f](GeoFusionConfig& c) { return &f(c)->eps_c_pe; });
+    real(p + "edge_tolerance_m", 0, 0.05, "P2E: hull points this near the nearest make the edge, m",
+         [f](GeoFusionConfig& c) { return &f(c)->edge_tolerance_m; });
+    real(p + "max_penetration_m", 0, 0.1,
+         "distance terms down to minus this (interpenetrating estimates) still make a contact, m",
+         [f](GeoFusionConfig& c) { return &f(c)->max_penetration_m; });
     real(p + "eps_g", -1, 1, "support check: N . (-gravity) above this",
          [f](GeoFusionConfig& c) { return &f(c)->eps_g; });
+    real(p + "side_max_tilt_deg", 0, 90,
+         "a contact that is no support is side by side with its normal this near horizontal, "
+         "leaning otherwise, deg",
+         [f](GeoFusionConfig& c) { return &f(c)->side_max_tilt_deg; });
+    real(p + "hysteresis", 1, 10,
+         "a pair in contact at the last keyframe keeps it with the thresholds times this",
+         [f](GeoFusionConfig& c) { return &f(c)->hysteresis; });
     real(p + "min_overlap_m", -0.1, 0.1, "projection overlap of the outlines, at least, m",
          [f](GeoFusionConfig& c) { return &f(c)->min_overlap_m; });
     real(p + "line_tolerance_m", 0, 0.1, "parallel line outlines meet within this, m",
          [f](GeoFusionConfig& c) { return &f(c)->line_tolerance_m; });
-    flag(p + "support_only", "only support contacts (false: side contacts too)",
+    flag(p + "support_only", "only support contacts, as the paper (false: leaning and side too)",
          [f](GeoFusionConfig& c) { return &f(c)->support_only; });
     auto g = [](GeoFusionConfig& c) { return &c.estimator.support_plane; };
     const std::string q = "relations.support_plane.";

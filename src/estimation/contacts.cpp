@@ -12,21 +12,39 @@ const char* toString(ContactType type) {
     case ContactType::kPlanePlane: return "plane-plane";
     case ContactType::kPlaneCurve: return "plane-curve";
     case ContactType::kCurveCurve: return "curve-curve";
+    case ContactType::kPlaneEdge: return "plane-edge";
   }
   return "?";
+}
+
+const char* toString(ContactKind kind) {
+  switch (kind) {
+    case ContactKind::kSupport: return "support";
+    case ContactKind::kLeaning: return "leaning";
+    case ContactKind::kSide: return "side";
+  }
+  return "?";
+}
+
+ContactKind contactKindOfName(const std::string& name) {
+  for (ContactKind k : {ContactKind::kSupport, ContactKind::kLeaning, ContactKind::kSide}) {
+    if (name == toString(k)) return k;
+  }
+  throw std::runtime_error("unknown contact kind '" + name + "'");
 }
 
 const char* shortName(ContactType type) {
   switch (type) {
     case ContactType::kPlanePlane: return "P2P";
     case ContactType::kPlaneCurve: return "P2C";
+    case ContactType::kPlaneEdge: return "P2E";
     default: return "C2C";
   }
 }
 
 ContactType contactTypeOfShortName(const std::string& name) {
-  for (ContactType t :
-       {ContactType::kPlanePlane, ContactType::kPlaneCurve, ContactType::kCurveCurve}) {
+  for (ContactType t : {ContactType::kPlanePlane, ContactType::kPlaneCurve,
+                        ContactType::kCurveCurve, ContactType::kPlaneEdge}) {
     if (name == shortName(t)) return t;
   }
   throw std::runtime_error("unknown contact type '" + name + "'");
@@ -108,7 +126,35 @@ std::vector<WorldCurve> worldCurves(const PosedModel& m) {
   return out;
 }
 
+// The points of m's hull nearest to the plane (centre c, outward normal n), in m's model frame:
+// those within `tolerance` of the nearest; `distance` receives the nearest's signed distance.
+std::vector<Eigen::Vector3d> nearestHullPoints(const PosedModel& m, const Eigen::Vector3d& c,
+                                               const Eigen::Vector3d& n, double tolerance,
+                                               double* distance) {
+  const TriangleMesh& hull =
+      m.model->collision_hull.vertices.empty() ? m.model->mesh : m.model->collision_hull;
+  const Eigen::Vector3d n_model = m.T_world_obj.linear().transpose() * n;
+  const double offset = n.dot(m.T_world_obj.translation() - c);
+  double nearest = std::numeric_limits<double>::max();
+  for (const auto& v : hull.vertices) nearest = std::min(nearest, n_model.dot(v.cast<double>()));
+  std::vector<Eigen::Vector3d> out;
+  for (const auto& v : hull.vertices) {
+    if (n_model.dot(v.cast<double>()) < nearest + tolerance) out.push_back(v.cast<double>());
+  }
+  *distance = nearest + offset;
+  return out;
+}
+
 }  // namespace
+
+ContactConfig heldContactConfig(const ContactConfig& config) {
+  ContactConfig held = config;
+  const double h = std::max(1.0, config.hysteresis);
+  for (double* eps : {&held.eps_n_pp, &held.eps_c_pp, &held.eps_n_pc, &held.eps_c_pc,
+                      &held.eps_c_cc, &held.eps_c_pe, &held.max_penetration_m})
+    *eps *= h;
+  return held;
+}
 
 bool projectionsOverlap(const std::vector<Eigen::Vector3d>& a,
                         const std::vector<Eigen::Vector3d>& b, const Eigen::Vector3d& direction,
@@ -172,19 +218,24 @@ std::vector<FeatureContact> findContacts(const std::vector<PosedModel>& objects,
     c.direction_residual = dir;
     c.distance_residual = dist;
     const double vertical = c.normal.dot(up);
-    c.support = std::abs(vertical) > cfg.eps_g;
-    if (cfg.support_only && !c.support) return;
+    const bool side = std::abs(vertical) < std::sin(cfg.side_max_tilt_deg * M_PI / 180.0);
+    c.kind = std::abs(vertical) > cfg.eps_g ? ContactKind::kSupport
+             : side                         ? ContactKind::kSide
+                                            : ContactKind::kLeaning;
+    if (cfg.support_only && !c.support()) return;
     // Project along gravity for support contacts (the paper), along the normal otherwise.
-    const Eigen::Vector3d along = c.support ? up : c.normal;
+    const Eigen::Vector3d along = c.support() ? up : c.normal;
     if (!projectionsOverlap(outline_i, outline_j, along, cfg.min_overlap_m, cfg.line_tolerance_m))
       return;
-    if (c.support && vertical < 0) {  // the supporter comes first
+    if (c.support() && vertical < 0) {  // the supporter comes first
       std::swap(c.object_a, c.object_b);
       std::swap(c.feature_a, c.feature_b);
       c.normal = -c.normal;
     }
     out.push_back(c);
   };
+  // A distance term within the thresholds: a small gap or an interpenetration of estimates.
+  auto near = [&](double dist, double eps) { return dist < eps && dist > -cfg.max_penetration_m; };
 
   // Plane-plane.
   for (std::size_t u = 0; u < planes_a.size(); ++u) {
@@ -192,7 +243,7 @@ std::vector<FeatureContact> findContacts(const std::vector<PosedModel>& objects,
       const WorldPlane &pu = planes_a[u], &pv = planes_b[v];
       const double dir = std::abs(pu.normal.dot(pv.normal) + 1.0);
       const double dist = pu.normal.dot(pv.center - pu.center);
-      if (dir >= cfg.eps_n_pp || std::abs(dist) >= cfg.eps_c_pp) continue;
+      if (dir >= cfg.eps_n_pp || !near(dist, cfg.eps_c_pp)) continue;
       accept(a, b, ContactType::kPlanePlane, {true, static_cast<int>(u)},
              {true, static_cast<int>(v)}, pu.normal, dir, dist, pu.boundary, pv.boundary);
     }
@@ -208,7 +259,7 @@ std::vector<FeatureContact> findContacts(const std::vector<PosedModel>& objects,
         const WorldCurve& k = curves[v];
         const double dir = std::abs(p.normal.dot(k.axis));
         const double dist = p.normal.dot(k.center - p.center) - k.radius;
-        if (dir >= cfg.eps_n_pc || std::abs(dist) >= cfg.eps_c_pc) continue;
+        if (dir >= cfg.eps_n_pc || !near(dist, cfg.eps_c_pc)) continue;
         accept(plane_obj, curve_obj, ContactType::kPlaneCurve, {true, static_cast<int>(u)},
                {false, static_cast<int>(v)}, p.normal, dir, dist, p.boundary, {k.end_a, k.end_b});
       }
@@ -233,18 +284,51 @@ std::vector<FeatureContact> findContacts(const std::vector<PosedModel>& objects,
       }
       if (n.dot(d) < 0) n = -n;
       const double dist = n.dot(d) - (cu.radius + cv.radius);
-      if (std::abs(dist) >= cfg.eps_c_cc) continue;
+      if (!near(dist, cfg.eps_c_cc)) continue;
       accept(a, b, ContactType::kCurveCurve, {false, static_cast<int>(u)},
              {false, static_cast<int>(v)}, n, 0.0, dist, {cu.end_a, cu.end_b},
              {cv.end_a, cv.end_b});
     }
   }
+  if (!out.empty()) return out;
+
+  // Plane-edge, both ways round: a plane against the other hull's nearest points (an edge or a
+  // corner), which must lie within the plane's outline.
+  auto plane_edge = [&](const std::vector<WorldPlane>& planes, int plane_obj, int edge_obj) {
+    const PosedModel& edge_model = objects[static_cast<std::size_t>(edge_obj)];
+    for (std::size_t u = 0; u < planes.size(); ++u) {
+      const WorldPlane& p = planes[u];
+      double dist = 0.0;
+      const std::vector<Eigen::Vector3d> touching =
+          nearestHullPoints(edge_model, p.center, p.normal, cfg.edge_tolerance_m, &dist);
+      if (touching.empty() || !near(dist, cfg.eps_c_pe)) continue;
+      std::vector<Eigen::Vector3d> world;
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      for (const auto& t : touching) world.push_back(edge_model.T_world_obj * t), mean += t;
+      const std::size_t before = out.size();
+      accept(plane_obj, edge_obj, ContactType::kPlaneEdge, {true, static_cast<int>(u)}, {false, -1},
+             p.normal, 0.0, dist, p.boundary, world);
+      if (out.size() > before) {
+        // Their centroid, moved along the normal to the nearest one's level: on the plane when
+        // the contact holds (the centroid of a polygonal rim lies inside it).
+        const Eigen::Vector3d n_model = edge_model.T_world_obj.linear().transpose() * p.normal;
+        const Eigen::Vector3d centroid = mean / static_cast<double>(touching.size());
+        double level = std::numeric_limits<double>::max();
+        for (const auto& t : touching) level = std::min(level, n_model.dot(t));
+        out.back().edge_point = centroid + n_model * (level - n_model.dot(centroid));
+      }
+    }
+  };
+  plane_edge(planes_a, a, b);
+  plane_edge(planes_b, b, a);
   return out;
 }
 
 std::vector<FeatureContact> findAllContacts(const std::vector<PosedModel>& objects,
                                             const Eigen::Vector3d& gravity,
-                                            const ContactConfig& config) {
+                                            const ContactConfig& config,
+                                            const std::vector<ObjectPair>& held) {
+  const ContactConfig held_config = heldContactConfig(config);
   std::vector<Eigen::Vector3d> centre(objects.size());
   std::vector<double> radius(objects.size(), 0.0);
   for (std::size_t i = 0; i < objects.size(); ++i) {
@@ -255,17 +339,49 @@ std::vector<FeatureContact> findAllContacts(const std::vector<PosedModel>& objec
     radius[i] = 0.5 * static_cast<double>((hi - lo).norm());
   }
   std::vector<FeatureContact> out;
-  const double reach = std::max({config.eps_c_pp, config.eps_c_pc, config.eps_c_cc});
+  const double reach = std::max(
+      {held_config.eps_c_pp, held_config.eps_c_pc, held_config.eps_c_cc, held_config.eps_c_pe});
   for (std::size_t i = 0; i < objects.size(); ++i) {
     for (std::size_t j = i + 1; j < objects.size(); ++j) {
       if (!objects[i].model || !objects[j].model) continue;
       if ((centre[i] - centre[j]).norm() > radius[i] + radius[j] + reach) continue;
-      const auto c =
-          findContacts(objects, static_cast<int>(i), static_cast<int>(j), gravity, config);
+      const bool was_held =
+          std::find(held.begin(), held.end(),
+                    ObjectPair(static_cast<int>(i), static_cast<int>(j))) != held.end();
+      const auto c = findContacts(objects, static_cast<int>(i), static_cast<int>(j), gravity,
+                                  was_held ? held_config : config);
       out.insert(out.end(), c.begin(), c.end());
     }
   }
+  markLeaning(objects, &out);
   return out;
+}
+
+void markLeaning(const std::vector<PosedModel>& objects, std::vector<FeatureContact>* contacts) {
+  constexpr double kRound = 0.005;  // a curve of this radius or more is a round side, not an edge
+  auto radius = [&](int object, const FeatureRef& f) {
+    if (object < 0 || f.plane || f.index < 0) return 0.0;
+    const auto& curves = objects[static_cast<std::size_t>(object)].model->features.curves;
+    return f.index < static_cast<int>(curves.size())
+               ? curves[static_cast<std::size_t>(f.index)].radius_m
+               : 0.0;
+  };
+  std::vector<char> stable(objects.size(), 0);
+  for (const FeatureContact& c : *contacts) {
+    if (!c.support() || c.object_b < 0) continue;
+    const bool on_own_face_or_side =
+        c.type == ContactType::kPlanePlane ||
+        (c.type == ContactType::kPlaneCurve && !c.feature_b.plane &&
+         radius(c.object_b, c.feature_b) >= kRound) ||
+        (c.type == ContactType::kCurveCurve && radius(c.object_b, c.feature_b) >= kRound &&
+         radius(c.object_a, c.feature_a) >= kRound);
+    if (on_own_face_or_side) stable[static_cast<std::size_t>(c.object_b)] = 1;
+  }
+  auto tipped = [&](int i) { return i >= 0 && !stable[static_cast<std::size_t>(i)]; };
+  for (FeatureContact& c : *contacts) {
+    if (c.kind == ContactKind::kSide && (tipped(c.object_a) || tipped(c.object_b)))
+      c.kind = ContactKind::kLeaning;
+  }
 }
 
 std::vector<FeatureContact> onePerPairAndType(const std::vector<FeatureContact>& contacts) {

@@ -263,18 +263,23 @@ bool featureGeometry(const ObjectModel& m, const FeatureRef& f, Eigen::Vector3d*
 }
 
 // The contact factor of a contact between models `ma` (object_a) and `mb` (object_b), weighted by
-// the configuration. A plane-curve contact takes the plane first: `swapped` says when the factor's
-// a is the contact's b.
+// the configuration. Plane-curve and plane-edge contacts take the plane first: `swapped` says when
+// the factor's a is the contact's b.
 bool contactFactorOf(const FeatureContact& c, const ObjectModel& ma, const ObjectModel& mb,
                      const StageTwoConfig& config, ContactFactor* e, bool* swapped) {
   e->type = c.type;
   e->w_p = 1.0 / config.contact_sigma_distance_m;
   e->w_q = 1.0 / config.contact_sigma_direction;
-  *swapped = c.type == ContactType::kPlaneCurve && !c.feature_a.plane;
+  *swapped = (c.type == ContactType::kPlaneCurve || c.type == ContactType::kPlaneEdge) &&
+             !c.feature_a.plane;
   const FeatureRef& fa = *swapped ? c.feature_b : c.feature_a;
   const FeatureRef& fb = *swapped ? c.feature_a : c.feature_b;
-  return featureGeometry(*swapped ? mb : ma, fa, &e->c_a, &e->n_a, &e->r_a) &&
-         featureGeometry(*swapped ? ma : mb, fb, &e->c_b, &e->n_b, &e->r_b);
+  if (!featureGeometry(*swapped ? mb : ma, fa, &e->c_a, &e->n_a, &e->r_a)) return false;
+  if (c.type == ContactType::kPlaneEdge) {
+    e->c_b = c.edge_point;
+    return true;
+  }
+  return featureGeometry(*swapped ? ma : mb, fb, &e->c_b, &e->n_b, &e->r_b);
 }
 
 }  // namespace

@@ -146,12 +146,19 @@ std::shared_ptr<ObjectModel> supportPlaneModel(const SupportPlane& plane,
 
 std::vector<FeatureContact> inferRelations(const std::vector<PosedModel>& objects,
                                            const PosedModel* ground, const Eigen::Vector3d& gravity,
-                                           const ContactConfig& config) {
+                                           const ContactConfig& config,
+                                           const std::vector<ObjectPair>& held) {
   std::vector<PosedModel> all;
   const int offset = ground ? 1 : 0;
   if (ground) all.push_back(*ground);
   all.insert(all.end(), objects.begin(), objects.end());
-  std::vector<FeatureContact> out = findAllContacts(all, gravity, config);
+  std::vector<ObjectPair> held_all;
+  for (const ObjectPair& p : held) {
+    if ((p.first < 0 || p.second < 0) && !ground) continue;
+    held_all.emplace_back(std::min(p.first, p.second) + offset,
+                          std::max(p.first, p.second) + offset);
+  }
+  std::vector<FeatureContact> out = findAllContacts(all, gravity, config, held_all);
   for (FeatureContact& c : out) c.object_a -= offset, c.object_b -= offset;
   return out;
 }

@@ -46,7 +46,7 @@ void emitContacts(YAML::Emitter& out, const KeyframeResult& r) {
     out << YAML::Key << "a" << YAML::Value << id(c.object_a);  // -1: the support plane
     out << YAML::Key << "b" << YAML::Value << id(c.object_b);
     out << YAML::Key << "type" << YAML::Value << shortName(c.type);
-    out << YAML::Key << "support" << YAML::Value << c.support;
+    out << YAML::Key << "kind" << YAML::Value << toString(c.kind);
     out << YAML::Key << "distance_residual" << YAML::Value << c.distance_residual;
     out << YAML::EndMap;
   }
@@ -295,7 +295,7 @@ bool readRunResults(const std::string& path, const ModelSet& models, RunResults*
       fc.object_a = index(c["a"].as<int>());
       fc.object_b = index(c["b"].as<int>());
       fc.type = contactTypeOfShortName(c["type"].as<std::string>());
-      fc.support = c["support"].as<bool>();
+      fc.kind = contactKindOfName(c["kind"].as<std::string>());
       fc.distance_residual = c["distance_residual"].as<double>();
       r.final_map.contacts.push_back(fc);
     }

@@ -132,6 +132,7 @@ void SceneEstimator::reset() {
   support_ = SupportPlane();
   support_model_.reset();
   contacts_.clear();
+  held_contacts_.clear();
   frame_objects_.clear();
   monitor_.reset();
 }
@@ -602,8 +603,24 @@ StageReport SceneEstimator::runRelationsAndStageTwo(const Keyframe* kf, StageTim
   std::vector<PosedModel> posed;
   for (std::size_t j : reported) posed.push_back({tracks_[j].model.get(), tracks_[j].T_refined});
   PosedModel ground{support_model_.get(), T_map_support_};
-  contacts_ =
-      inferRelations(posed, support_model_ ? &ground : nullptr, config_.gravity, config_.contacts);
+  // Track ids of a pair of indices into `posed` (-1: the support), lower first.
+  auto ids = [&](int a, int b) {
+    auto id = [&](int i) { return i < 0 ? -1 : tracks_[reported[static_cast<std::size_t>(i)]].id; };
+    return std::make_pair(std::min(id(a), id(b)), std::max(id(a), id(b)));
+  };
+  std::vector<ObjectPair> held;
+  const int n = static_cast<int>(reported.size());
+  for (int a = -1; a < n; ++a) {
+    for (int b = a + 1; b < n; ++b) {
+      if (std::find(held_contacts_.begin(), held_contacts_.end(), ids(a, b)) !=
+          held_contacts_.end())
+        held.emplace_back(a, b);
+    }
+  }
+  contacts_ = inferRelations(posed, support_model_ ? &ground : nullptr, config_.gravity,
+                             config_.contacts, held);
+  held_contacts_.clear();
+  for (const FeatureContact& c : contacts_) held_contacts_.push_back(ids(c.object_a, c.object_b));
   if (timings) timings->relations_ms = msSince(t0);
 
   t0 = Clock::now();

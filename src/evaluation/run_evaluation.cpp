@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <map>
 #include <set>
@@ -221,6 +222,36 @@ MapScore evaluateFinalMap(const GroundTruth& gt, const std::vector<ObjectEstimat
   return score;
 }
 
+// Every contact of the final map against the truth, per kind, as (object pair, kind) with the
+// table as -1: an estimated contact is correct when both its objects matched and the truth has
+// the pair in contact with that kind. The graphs of the evaluation file list them all.
+void evaluateContactKinds(const GroundTruth& gt, const RunResults& results,
+                          const std::function<int(int)>& truthOf,
+                          const std::function<int(int)>& idOf, RunEvaluation* ev) {
+  std::set<ContactKey> truth, seen;
+  for (const FeatureContact& c : gt.scene.contacts) {
+    const ContactKey key = keyOf(c.object_a, c.object_b, toString(c.kind));
+    if (!truth.insert(key).second) continue;
+    ++ev->contacts_by_kind[static_cast<int>(c.kind)].truth;
+    ev->graph_true_contacts.push_back(
+        {c.object_a, c.object_b, shortName(c.type), toString(c.kind), true});
+  }
+  for (const FeatureContact& c : results.final_map.contacts) {
+    const int a = truthOf(c.object_a), b = truthOf(c.object_b);
+    const bool matched = (c.object_a < 0 || a >= 0) && (c.object_b < 0 || b >= 0);
+    const ContactKey key =
+        matched ? keyOf(a, b, toString(c.kind))
+                : keyOf(-2 - idOf(c.object_a), -2 - idOf(c.object_b), toString(c.kind));
+    if (!seen.insert(key).second) continue;
+    const bool correct = matched && truth.count(key);
+    ContactCounts& counts = ev->contacts_by_kind[static_cast<int>(c.kind)];
+    ++counts.estimated;
+    counts.correct += correct;
+    ev->graph_estimated_contacts.push_back(
+        {idOf(c.object_a), idOf(c.object_b), shortName(c.type), toString(c.kind), correct});
+  }
+}
+
 // Contact graphs: support contacts, as (object pair, type) with the table as -1; an estimated
 // contact is correct when both its objects matched and the truth has it.
 void evaluateContactGraph(const GroundTruth& gt, const RunResults& results, const MapScore& score,
@@ -232,11 +263,10 @@ void evaluateContactGraph(const GroundTruth& gt, const RunResults& results, cons
   std::set<int> matched_truth(score.match.begin(), score.match.end());
   matched_truth.insert(-1);
   for (const FeatureContact& c : gt.scene.contacts) {
-    if (!c.support) continue;
+    if (!c.support()) continue;
     const ContactKey key = keyOf(c.object_a, c.object_b, shortName(c.type));
     true_pairs.insert(pairOf(key));
     if (!true_keys.insert(key).second) continue;
-    ev->graph_true_contacts.push_back({c.object_a, c.object_b, shortName(c.type), true, true});
     ev->true_contacts_between_matched +=
         matched_truth.count(c.object_a) && matched_truth.count(c.object_b);
   }
@@ -245,12 +275,15 @@ void evaluateContactGraph(const GroundTruth& gt, const RunResults& results, cons
   ev->has_contacts = results.method == toString(Method::kGeoFusion);
   if (!ev->has_contacts) return;
   std::set<ContactKey> seen;
-  auto truthOf = [&](int index) {
+  const std::function<int(int)> truthOf = [&](int index) {
     return index < 0 ? -1 : score.match[static_cast<std::size_t>(index)];
   };
-  auto idOf = [&](int index) { return index < 0 ? -1 : map[static_cast<std::size_t>(index)].id; };
+  const std::function<int(int)> idOf = [&](int index) {
+    return index < 0 ? -1 : map[static_cast<std::size_t>(index)].id;
+  };
+  evaluateContactKinds(gt, results, truthOf, idOf, ev);
   for (const FeatureContact& c : results.final_map.contacts) {
-    if (!c.support) continue;
+    if (!c.support()) continue;
     const int a = truthOf(c.object_a), b = truthOf(c.object_b);
     const bool matched = (c.object_a < 0 || a >= 0) && (c.object_b < 0 || b >= 0);
     // Contacts of unmatched objects are wrong; duplicates (two features) count once.
@@ -260,10 +293,7 @@ void evaluateContactGraph(const GroundTruth& gt, const RunResults& results, cons
     if (estimated_pairs.insert(pairOf(key)).second)
       ev->correct_contact_pairs += matched && true_pairs.count(pairOf(key));
     if (!seen.insert(key).second) continue;
-    const bool correct = matched && true_keys.count(key);
-    ev->correct_contacts += correct;
-    ev->graph_estimated_contacts.push_back(
-        {idOf(c.object_a), idOf(c.object_b), shortName(c.type), true, correct});
+    ev->correct_contacts += matched && true_keys.count(key);
   }
   ev->estimated_contacts = static_cast<int>(seen.size());
   ev->estimated_contact_pairs = static_cast<int>(estimated_pairs.size());
@@ -565,6 +595,11 @@ bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::s
                 {"true_pairs", e.true_contact_pairs},
                 {"estimated_pairs", e.estimated_contact_pairs},
                 {"correct_pairs", e.correct_contact_pairs}};
+    for (ContactKind k : {ContactKind::kSupport, ContactKind::kLeaning, ContactKind::kSide}) {
+      const ContactCounts& n = e.contacts_by_kind[static_cast<int>(k)];
+      contacts["by_kind"][toString(k)] = {
+          {"true", n.truth}, {"estimated", n.estimated}, {"correct", n.correct}};
+    }
   }
   j["final_map"] = {{"objects", e.map_objects},
                     {"matched", e.map_matched},
@@ -646,7 +681,8 @@ bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::s
       out.push_back({{"a", c.a},
                      {"b", c.b},
                      {"type", c.type},
-                     {"support", c.support},
+                     {"kind", c.kind},
+                     {"support", c.kind == "support"},
                      {"correct", c.correct}});
     }
     return out;
@@ -701,6 +737,12 @@ std::string summarize(const RunEvaluation& e) {
                   e.estimated_contacts, e.correct_contacts, e.correct_contact_pairs,
                   e.estimated_contact_pairs, e.true_contacts, e.true_contacts_between_matched);
     s << line;
+    s << "  contacts per kind (found, true of them, true):";
+    for (ContactKind k : {ContactKind::kSupport, ContactKind::kLeaning, ContactKind::kSide}) {
+      const ContactCounts& n = e.contacts_by_kind[static_cast<int>(k)];
+      s << " " << toString(k) << " " << n.estimated << ", " << n.correct << ", " << n.truth;
+    }
+    s << "\n";
   }
   std::snprintf(line, sizeof(line),
                 "  interpenetration %.1f mm mean, %.1f mm max (%zu touching pairs); gap under "

@@ -100,7 +100,7 @@ geofusion::ObjectMap toObjectMapMsg(const KeyframeResult& r, const SupportPlane&
                                           : geofusion::ContactRelation::FEATURE_CURVE;
     cr.feature_b_type = c.feature_b.plane ? geofusion::ContactRelation::FEATURE_PLANE
                                           : geofusion::ContactRelation::FEATURE_CURVE;
-    cr.a_supports_b = c.support;
+    cr.a_supports_b = c.support();
     cr.point_a = toPointMsg(a);
     cr.point_b = toPointMsg(b);
     cr.distance_residual_m = static_cast<float>(c.distance_residual);

@@ -214,8 +214,44 @@ std::vector<FeatureContact> groundTruthContacts(const ClutterScene& scene,
       }
     }
   }
+  std::vector<FeatureContact> indexed = out;  // markLeaning indexes `posed`: the table is 0
+  for (FeatureContact& c : indexed) c.object_a += 1, c.object_b += 1;
+  markLeaning(posed, &indexed);
+  for (std::size_t k = 0; k < out.size(); ++k) out[k].kind = indexed[k].kind;
   return out;
 }
+
+namespace {
+
+// Standing beside object k (drawn by `pick`), its longest side up, tipped 25 degrees towards k
+// about a horizontal axis, at a distance where its top reaches over k's side: let go, it comes
+// to rest leaning on k.
+void leanBeside(const Physics& physics,
+                const std::vector<std::shared_ptr<const ObjectModel>>& placed,
+                const std::shared_ptr<const ObjectModel>& model, double pick, double bearing,
+                Eigen::Matrix3d* R, Eigen::Vector2d* xy) {
+  const int k = static_cast<int>(pick * physics.size()) % static_cast<int>(physics.size());
+  Eigen::Vector3f lo, hi, klo, khi;
+  model->mesh.bounds(&lo, &hi);
+  placed[static_cast<std::size_t>(k)]->mesh.bounds(&klo, &khi);
+  const Eigen::Vector3f size = hi - lo;
+  int longest = 0;
+  size.maxCoeff(&longest);
+  // The longest model axis to world z.
+  Eigen::Matrix3d up = Eigen::Matrix3d::Identity();
+  if (longest == 0) up = Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  if (longest == 1) up = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const double phi = 2 * M_PI * bearing;
+  const Eigen::Vector3d towards(-std::cos(phi), -std::sin(phi), 0.0);  // from the new one to k
+  const Eigen::Vector3d tip_axis = Eigen::Vector3d::UnitZ().cross(towards);
+  *R = Eigen::AngleAxisd(25.0 * M_PI / 180.0, tip_axis) *
+       Eigen::AngleAxisd(phi, Eigen::Vector3d::UnitZ()) * up;
+  const double k_radius = 0.5 * static_cast<double>((khi - klo).head<2>().norm());
+  const double own = 0.5 * static_cast<double>(size.minCoeff());
+  *xy = physics.pose(k).translation().head<2>() - towards.head<2>() * (k_radius + own + 0.01);
+}
+
+}  // namespace
 
 bool makeClutterScene(const ModelSet& models, const ClutterConfig& config, unsigned seed,
                       ClutterScene* scene, std::string* report) {
@@ -254,10 +290,13 @@ bool makeClutterScene(const ModelSet& models, const ClutterConfig& config, unsig
     R = Eigen::AngleAxisd(0.1 * (uni(rng) - 0.5), Eigen::Vector3d::UnitX()) * R;
     Eigen::Vector2d xy(config.area_x_m * (uni(rng) - 0.5), config.area_y_m * (uni(rng) - 0.5));
     double floor_z = top;
-    if (!placed.empty() && uni(rng) < config.stack_fraction) {  // onto an existing object
+    const double choice = placed.empty() ? 1.0 : uni(rng);  // no draw for the first
+    if (!placed.empty() && choice < config.stack_fraction) {  // onto an existing object
       const int k = static_cast<int>(uni(rng) * physics.size()) % static_cast<int>(physics.size());
       xy = physics.pose(k).translation().head<2>() +
            Eigen::Vector2d(0.02 * (uni(rng) - 0.5), 0.02 * (uni(rng) - 0.5));
+    } else if (!placed.empty() && choice < config.stack_fraction + config.lean_fraction) {
+      leanBeside(physics, placed, model, uni(rng), uni(rng), &R, &xy);
     }
     // Start above everything already within reach of (x, y).
     for (std::size_t k = 0; k < physics.size(); ++k) {

@@ -321,7 +321,7 @@ int main(int argc, char** argv) {
     }
     std::ofstream(stamp_path) << request.str();
     int support = 0;
-    for (const auto& c : scene.contacts) support += c.support;
+    for (const auto& c : scene.contacts) support += c.support();
     const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
     char line[400];
     std::snprintf(line, sizeof(line),

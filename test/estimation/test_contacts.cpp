@@ -1,4 +1,5 @@
-// Contact inference between surface features (plane-plane, plane-curve, curve-curve) with the
+// Contact inference between surface features (plane-plane, plane-curve, curve-curve, plane-edge)
+// and their kinds (support, leaning, side), with the
 // support-direction and projection-overlap checks, on arrangements with known answers.
 #include "geofusion/estimation/contacts.h"
 
@@ -42,7 +43,7 @@ TEST(Contacts, BoxOnTableIsOnePlanePlaneSupport) {
   ASSERT_EQ(contacts.size(), 1u);
   const FeatureContact& c = contacts[0];
   EXPECT_EQ(c.type, ContactType::kPlanePlane);
-  EXPECT_TRUE(c.support);
+  EXPECT_TRUE(c.support());
   EXPECT_EQ(c.object_a, 0);  // the table supports the box
   EXPECT_EQ(c.object_b, 1);
   EXPECT_NEAR(c.normal.z(), 1.0, 1e-9);
@@ -72,19 +73,19 @@ TEST(Contacts, BoxesSideBySideTouchOnlyAsSideContacts) {
   const std::vector<PosedModel> objects = {
       {&table, at(0, 0, -0.02)}, {&box, at(0, 0, 0.05)}, {&box, at(0.101, 0.02, 0.05)}};
   // Support only (the paper): both boxes on the table, nothing between them.
-  const auto support = findAllContacts(objects, kGravity);
+  ContactConfig support_only;
+  support_only.support_only = true;
+  const auto support = findAllContacts(objects, kGravity, support_only);
   EXPECT_EQ(support.size(), 2u);
   for (const auto& c : support) {
     EXPECT_EQ(c.object_a, 0);
-    EXPECT_TRUE(c.support);
+    EXPECT_TRUE(c.support());
   }
-  ContactConfig all;
-  all.support_only = false;
-  const auto contacts = findAllContacts(objects, kGravity, all);
+  const auto contacts = findAllContacts(objects, kGravity);
   ASSERT_EQ(contacts.size(), 3u);
   const FeatureContact& side = contacts[2];
   EXPECT_EQ(side.type, ContactType::kPlanePlane);
-  EXPECT_FALSE(side.support);
+  EXPECT_EQ(side.kind, ContactKind::kSide);
   EXPECT_NEAR(std::abs(side.normal.x()), 1.0, 1e-9);
 }
 
@@ -96,7 +97,7 @@ TEST(Contacts, CanLyingOnABoxIsPlaneCurve) {
   const auto contacts = findAllContacts(objects, kGravity);
   ASSERT_EQ(contacts.size(), 1u);
   EXPECT_EQ(contacts[0].type, ContactType::kPlaneCurve);
-  EXPECT_TRUE(contacts[0].support);
+  EXPECT_TRUE(contacts[0].support());
   EXPECT_EQ(contacts[0].object_a, 0);
   EXPECT_FALSE(contacts[0].feature_b.plane);
   EXPECT_NEAR(can.features.curves[contacts[0].feature_b.index].radius_m, 0.033, 0.002);
@@ -111,7 +112,7 @@ TEST(Contacts, CrossedCansAreCurveCurve) {
   const auto contacts = findAllContacts(objects, kGravity);
   ASSERT_EQ(contacts.size(), 1u);
   EXPECT_EQ(contacts[0].type, ContactType::kCurveCurve);
-  EXPECT_TRUE(contacts[0].support);
+  EXPECT_TRUE(contacts[0].support());
   EXPECT_EQ(contacts[0].object_a, 0);
   EXPECT_NEAR(contacts[0].normal.z(), 1.0, 1e-6);
   // Lifted 2 cm: no contact.
@@ -132,6 +133,73 @@ TEST(Contacts, BoxLeaningOnItsEdgeIsPlaneCurve) {
   ASSERT_EQ(contacts.size(), 1u);
   EXPECT_EQ(contacts[0].type, ContactType::kPlaneCurve);
   EXPECT_NEAR(box.features.curves[contacts[0].feature_b.index].radius_m, 0.0, 1e-9);
+}
+
+// A clamp (a thin box) leaning at 30 degrees with its face on the rim of an upright can: the rim
+// is no feature of the can, so it is a plane-edge contact, leaning, with the clamp's face normal.
+TEST(Contacts, ClampLeaningOnACanIsOneLeaningContact) {
+  const ObjectModel can = canModel(0.033, 0.1), clamp = boxModel(0.02, 0.08, 0.18);
+  const double theta = 30.0 * M_PI / 180.0, gap = 0.001;
+  const Eigen::Vector3d rim(0.033, 0, 0.1);                        // the rim point it rests on
+  const Eigen::Vector3d n(-std::cos(theta), 0, -std::sin(theta));  // the face's normal, to the can
+  const Eigen::Vector3d u(-std::sin(theta), 0, std::cos(theta));   // the clamp's long axis
+  // The clamp's frame: its x along -n (thickness), z along u (length); the rim 3 cm above the
+  // middle of the face.
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear().col(0) = -n, T.linear().col(1) = Eigen::Vector3d::UnitY(), T.linear().col(2) = u;
+  T.translation() = rim - n * (gap + 0.01) - u * 0.03;
+  const std::vector<PosedModel> objects = {{&can, at(0, 0, 0.05)}, {&clamp, T}};
+  const auto contacts = onePerPairAndType(findAllContacts(objects, kGravity));
+  ASSERT_EQ(contacts.size(), 1u);
+  const FeatureContact& c = contacts[0];
+  EXPECT_EQ(c.type, ContactType::kPlaneEdge);
+  EXPECT_EQ(c.kind, ContactKind::kLeaning);
+  EXPECT_NEAR(c.distance_residual, gap, 1e-4);
+  // The normal is the clamp's face normal, from the plane's object to the other.
+  const Eigen::Vector3d from_clamp = c.object_a == 1 ? c.normal : Eigen::Vector3d(-c.normal);
+  EXPECT_GT(from_clamp.dot(n), 0.999);
+  // The touching point is on the rim, in the can's frame (model centre 5 cm below the top).
+  const FeatureRef& edge = c.object_a == 1 ? c.feature_b : c.feature_a;
+  EXPECT_EQ(edge.index, -1);
+  EXPECT_NEAR(c.edge_point.z(), 0.05, 1e-3);
+  EXPECT_NEAR(Eigen::Vector2d(c.edge_point.x(), c.edge_point.y()).norm(), 0.033, 2e-3);
+  // Lifted 2 cm off the rim along the normal: nothing.
+  Eigen::Isometry3d off = T;
+  off.translation() -= n * 0.02;
+  EXPECT_TRUE(findAllContacts({objects[0], {&clamp, off}}, kGravity).empty());
+}
+
+// Estimates interpenetrate: a mug 9 mm into the can it stands on (as hand-annotated YCB-Video
+// poses do) is still a support contact, with the interpenetration as its distance term; deeper
+// than max_penetration_m it is not.
+TEST(Contacts, InterpenetratingEstimatesStillTouch) {
+  const ObjectModel can = canModel(0.033, 0.1), mug = canModel(0.04, 0.09);
+  const std::vector<PosedModel> sunk = {{&can, at(0, 0, 0.05)}, {&mug, at(0, 0, 0.145 - 0.009)}};
+  const auto contacts = findAllContacts(sunk, kGravity);
+  ASSERT_EQ(onePerPairAndType(contacts).size(), 1u);
+  EXPECT_EQ(contacts[0].type, ContactType::kPlanePlane);
+  EXPECT_TRUE(contacts[0].support());
+  EXPECT_EQ(contacts[0].object_a, 0);
+  EXPECT_NEAR(contacts[0].distance_residual, -0.009, 1e-6);
+  ContactConfig strict;
+  strict.max_penetration_m = 0.005;
+  EXPECT_TRUE(findAllContacts(sunk, kGravity, strict).empty());
+}
+
+// Hysteresis: a pair in contact at the last keyframe keeps it a little beyond the thresholds
+// that make a new contact, so a gap wobbling about eps_c_pp does not make it blink.
+TEST(Contacts, AHeldContactHasLooserThresholds) {
+  const ObjectModel table = boxModel(1.0, 1.0, 0.04), box = boxModel(0.1, 0.1, 0.1);
+  const std::vector<PosedModel> objects = {{&table, at(0, 0, -0.02)}, {&box, at(0, 0, 0.057)}};
+  ContactConfig cfg;  // eps_c_pp 6 mm, hysteresis 1.5: held up to 9 mm
+  EXPECT_TRUE(findAllContacts(objects, kGravity, cfg).empty());
+  const auto held = findAllContacts(objects, kGravity, cfg, {{0, 1}});
+  ASSERT_EQ(held.size(), 1u);
+  EXPECT_NEAR(held[0].distance_residual, 0.007, 1e-6);
+  cfg.hysteresis = 1.0;
+  EXPECT_TRUE(findAllContacts(objects, kGravity, cfg, {{0, 1}}).empty());
+  const std::vector<PosedModel> far = {objects[0], {&box, at(0, 0, 0.060)}};
+  EXPECT_TRUE(findAllContacts(far, kGravity, ContactConfig(), {{0, 1}}).empty());
 }
 
 TEST(Contacts, ProjectionOverlapNeedsRealOverlap) {

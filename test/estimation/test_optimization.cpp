@@ -194,6 +194,43 @@ TEST(StageTwo, CanLyingOnABoxTouchesIt) {
   EXPECT_NEAR(poses[1].translation().z(), 0.85 + 0.03, 0.001);
 }
 
+// A clamp leaning on a can's rim, its estimate 4 mm into the rim: stage II's plane-edge factor
+// moves it back onto the rim (no interpenetration, still in contact, still leaning).
+TEST(StageTwo, ClampLeaningOnACanStaysInContactWithoutInterpenetration) {
+  const Ground ground;
+  const ObjectModel can = canModel(0.033, 0.1), clamp = boxModel(0.02, 0.08, 0.18);
+  const double theta = 30.0 * M_PI / 180.0;
+  const Eigen::Vector3d rim(0.033, 0, 0.85);
+  const Eigen::Vector3d n(-std::cos(theta), 0, -std::sin(theta)),
+      u(-std::sin(theta), 0, std::cos(theta));
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear().col(0) = -n, T.linear().col(1) = Eigen::Vector3d::UnitY(), T.linear().col(2) = u;
+  T.translation() = rim - n * (0.01 - 0.004) - u * 0.03;  // 4 mm into the rim
+  std::vector<Eigen::Isometry3d> priors = {at(0, 0, 0.80), T};
+  std::vector<const ObjectModel*> models = {&can, &clamp};
+  const auto leaning = [&](const std::vector<Eigen::Isometry3d>& poses) {
+    std::vector<FeatureContact> out;
+    for (const FeatureContact& c : inferRelations({{&can, poses[0]}, {&clamp, poses[1]}},
+                                                  &ground.posed, kGravity, ContactConfig()))
+      if (c.kind == ContactKind::kLeaning) out.push_back(c);
+    return out;
+  };
+  const auto before = leaning(priors);
+  ASSERT_EQ(before.size(), 1u);
+  EXPECT_EQ(before[0].type, ContactType::kPlaneEdge);
+  EXPECT_NEAR(before[0].distance_residual, -0.004, 1e-4);
+  std::vector<Eigen::Isometry3d> poses = priors;
+  ASSERT_TRUE(optimizeStageTwo(&poses, models, priors,
+                               inferRelations({{&can, priors[0]}, {&clamp, priors[1]}},
+                                              &ground.posed, kGravity, ContactConfig()),
+                               &ground.posed, StageTwoConfig())
+                  .solved);
+  const auto after = leaning(poses);
+  ASSERT_EQ(after.size(), 1u);
+  EXPECT_NEAR(after[0].distance_residual, 0.0, 5e-4);
+  EXPECT_NEAR(poses[0].translation().z(), 0.80, 0.001);  // the can stays on the table
+}
+
 TEST(Relations, SupportPlaneFromRenderedDepth) {
   OffscreenRenderer renderer;
   ASSERT_TRUE(renderer.ok());
@@ -253,27 +290,29 @@ TEST(Relations, CansSideBySideTouchCurveToCurve) {
     } else {
       ++c2c;
       EXPECT_EQ(c.type, ContactType::kCurveCurve);
-      EXPECT_FALSE(c.support);
+      EXPECT_FALSE(c.support());
       EXPECT_NEAR(std::abs(c.normal.y()), 1.0, 1e-3);
     }
   }
   EXPECT_EQ(on_table, 2);
   EXPECT_EQ(c2c, 1);
-  // Stage II keeps only support contacts: the side contact is not a support.
-  for (const auto& c : inferRelations(posed, &ground.posed, kGravity, ContactConfig()))
+  // Support only (the paper's stage II): the side contact is not a support.
+  ContactConfig support_only;
+  support_only.support_only = true;
+  for (const auto& c : inferRelations(posed, &ground.posed, kGravity, support_only))
     EXPECT_EQ(c.object_a, -1);
 }
 
 TEST(Relations, TouchingVerticalFacesAreNoSupport) {
   const Ground ground;
   const ObjectModel box = boxModel(0.1, 0.1, 0.1);
-  // Two boxes on the table, side faces 1 mm apart: only the two table contacts.
+  // Two boxes on the table, side faces 1 mm apart: two table supports and a side contact.
   std::vector<PosedModel> posed = {{&box, at(0, 0, 0.80)}, {&box, at(0.101, 0, 0.80)}};
   const auto contacts = inferRelations(posed, &ground.posed, kGravity, ContactConfig());
-  ASSERT_EQ(contacts.size(), 2u);
+  ASSERT_EQ(contacts.size(), 3u);
   for (const auto& c : contacts) {
-    EXPECT_EQ(c.object_a, -1);
-    EXPECT_TRUE(c.support);
+    EXPECT_EQ(c.object_a == -1, c.support());
+    if (!c.support()) EXPECT_EQ(c.kind, ContactKind::kSide);
   }
 }
 

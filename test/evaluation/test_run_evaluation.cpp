@@ -91,7 +91,7 @@ class RunEvaluationTest : public ::testing::Test {
       c.object_a = -1;
       c.object_b = i;
       c.type = ContactType::kPlanePlane;
-      c.support = true;
+      c.kind = ContactKind::kSupport;
       gt.scene.contacts.push_back(c);
     }
     // Cameras 0.9 m above the table looking down, along a line.
@@ -255,7 +255,7 @@ TEST_F(RunEvaluationTest, ContactsOfTheWrongTypeOrObjectAreWrong) {
   FeatureContact between;  // the two objects do not touch
   between.object_a = 0;
   between.object_b = 1;
-  between.support = true;
+  between.kind = ContactKind::kSupport;
   results.final_map.contacts.push_back(between);
   const RunEvaluation ev = evaluate();
   EXPECT_EQ(ev.estimated_contacts, 3);
@@ -265,9 +265,15 @@ TEST_F(RunEvaluationTest, ContactsOfTheWrongTypeOrObjectAreWrong) {
   EXPECT_EQ(ev.estimated_contact_pairs, 3);
   EXPECT_EQ(ev.correct_contact_pairs, 2);
   EXPECT_EQ(ev.true_contact_pairs, 2);
+  // Per kind (pair and kind, whatever the feature types): both table supports are right.
+  const ContactCounts& support = ev.contacts_by_kind[static_cast<int>(ContactKind::kSupport)];
+  EXPECT_EQ(support.estimated, 3);
+  EXPECT_EQ(support.correct, 2);
+  EXPECT_EQ(support.truth, 2);
+  EXPECT_EQ(ev.contacts_by_kind[static_cast<int>(ContactKind::kSide)].estimated, 0);
   int correct = 0;
   for (const GraphContact& c : ev.graph_estimated_contacts) correct += c.correct;
-  EXPECT_EQ(correct, 1);
+  EXPECT_EQ(correct, 2);
   // A method without contact inference has no contact figures at all.
   results.method = "R-Front";
   EXPECT_FALSE(evaluate().has_contacts);

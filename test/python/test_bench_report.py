@@ -219,6 +219,27 @@ class OtherMetricsTest(unittest.TestCase):
         self.assertEqual(c['contact_recall'], 0.0)
         self.assertIsNone(c['contact_f1'])
 
+    def test_contacts_per_kind_summed_over_scenes(self):
+        def kinds(support, leaning, side):
+            return {k: dict(zip(('true', 'estimated', 'correct'), v))
+                    for k, v in (('support', support), ('leaning', leaning), ('side', side))}
+        a = make_eval(scene='s1', contacts={'true': 10, 'estimated': 8, 'correct': 6,
+                                            'by_kind': kinds((10, 8, 6), (2, 1, 1), (4, 0, 0))})
+        b = make_eval(scene='s2', contacts={'true': 4, 'estimated': 4, 'correct': 4,
+                                            'by_kind': kinds((4, 4, 4), (0, 3, 0), (2, 2, 1))})
+        c = bench_report.contact_kind_metrics([a, b])
+        self.assertAlmostEqual(c['contact_support_precision'], 10 / 12)
+        self.assertAlmostEqual(c['contact_support_recall'], 10 / 14)
+        self.assertAlmostEqual(c['contact_leaning_precision'], 1 / 4)
+        self.assertAlmostEqual(c['contact_leaning_recall'], 1 / 2)
+        self.assertAlmostEqual(c['contact_leaning_f1'], 2 * 0.25 * 0.5 / 0.75)
+        self.assertEqual((c['contact_side_correct'], c['contact_side_estimated'],
+                          c['contact_side_true']), (1, 2, 6))
+        # Files without per-kind counts (another method, older files): no figure.
+        c = bench_report.contact_kind_metrics([make_eval()])
+        self.assertIsNone(c['contact_leaning_f1'])
+        self.assertIsNone(c['contact_side_true'])
+
     def test_class_recall_from_the_final_maps(self):
         # make_eval's final map matches true objects 0..3, one class each; a second scene where
         # object 2 is missed.

@@ -45,9 +45,9 @@ TEST(ClutterScene, PrimitivesSettleWithoutInterpenetrationAndWithAContactGraph) 
   int on_table = 0, stacked = 0, side = 0;
   for (const auto& c : scene.contacts) {
     EXPECT_LE(hullDistance(scene, c.object_a, c.object_b), config.touch_distance_m);
-    if (c.support && c.object_a == -1) ++on_table;
-    if (c.support && c.object_a >= 0) ++stacked;
-    if (!c.support) ++side;
+    if (c.support() && c.object_a == -1) ++on_table;
+    if (c.support() && c.object_a >= 0) ++stacked;
+    if (!c.support()) ++side;
   }
   EXPECT_GE(on_table, 6) << report;
   EXPECT_GE(stacked, 1) << report;

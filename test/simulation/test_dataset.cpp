@@ -127,7 +127,7 @@ TEST_F(GroundTruthTest, RoundTripKeepsEverything) {
     EXPECT_EQ(a.type, b.type);
     EXPECT_EQ(a.feature_a.plane, b.feature_a.plane);
     EXPECT_EQ(a.feature_b.index, b.feature_b.index);
-    EXPECT_EQ(a.support, b.support);
+    EXPECT_EQ(a.kind, b.kind);
   }
   ASSERT_EQ(back.phantoms.size(), 1u);
   EXPECT_EQ(back.phantoms[0].host, 1);

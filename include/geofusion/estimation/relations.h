@@ -57,9 +57,12 @@ std::shared_ptr<ObjectModel> supportPlaneModel(const SupportPlane& plane,
                                                Eigen::Isometry3d* T_map_model,
                                                double thickness_m = 0.03);
 
-/// Contacts among posed objects and, when `ground` is given, with it (object index -1).
+/// Contacts among posed objects and, when `ground` is given, with it (object index -1); the
+/// pairs in `held` (the same indices; in contact at the previous keyframe) with the hysteresis
+/// thresholds.
 std::vector<FeatureContact> inferRelations(const std::vector<PosedModel>& objects,
                                            const PosedModel* ground, const Eigen::Vector3d& gravity,
-                                           const ContactConfig& config);
+                                           const ContactConfig& config,
+                                           const std::vector<ObjectPair>& held = {});
 
 }  // namespace geofusion

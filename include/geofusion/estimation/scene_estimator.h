@@ -283,7 +283,9 @@ class SceneEstimator {
   SupportPlane support_;
   std::shared_ptr<ObjectModel> support_model_;
   Eigen::Isometry3d T_map_support_ = Eigen::Isometry3d::Identity();
-  std::vector<FeatureContact> contacts_;       ///< track indices; -1 = support
+  std::vector<FeatureContact> contacts_;  ///< reported-track indices; -1 = support
+  /// Pairs in contact at the last keyframe, as track ids (-1 = the support), for hysteresis.
+  std::vector<std::pair<int, int>> held_contacts_;
   std::vector<ObjectEstimate> frame_objects_;  ///< FbF: this keyframe's detections
 };
 

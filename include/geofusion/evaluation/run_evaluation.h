@@ -109,10 +109,15 @@ struct GraphObject {
 };
 
 struct GraphContact {
-  int a = -1, b = -1;  ///< as GraphObject::id; a = -1 is the table / support plane
-  std::string type;    ///< P2P, P2C, C2C
-  bool support = true;
-  bool correct = false;  ///< estimated contacts: the true graph has it
+  int a = -1, b = -1;    ///< as GraphObject::id; a = -1 is the table / support plane
+  std::string type;      ///< P2P, P2C, C2C, P2E
+  std::string kind;      ///< support, leaning, side
+  bool correct = false;  ///< estimated contacts: the true graph has it (pair and kind)
+};
+
+/// Contacts of one kind in the final map against the truth, as (object pair, kind).
+struct ContactCounts {
+  int truth = 0, estimated = 0, correct = 0;
 };
 
 struct RunEvaluation {
@@ -144,8 +149,10 @@ struct RunEvaluation {
   /// The same, per object pair whatever the contact type.
   int true_contact_pairs = 0, estimated_contact_pairs = 0, correct_contact_pairs = 0;
   int true_contacts_between_matched = 0;  ///< true contacts among matched objects and the table
-  std::vector<double> penetration_m;      ///< per touching or intersecting pair (object or table)
-  std::vector<double> gap_m;              ///< per true support of a matched object
+  /// Every contact (support, leaning, side; indexed by ContactKind) as (object pair, kind).
+  ContactCounts contacts_by_kind[3];
+  std::vector<double> penetration_m;  ///< per touching or intersecting pair (object or table)
+  std::vector<double> gap_m;          ///< per true support of a matched object
   std::vector<GraphObject> graph_true_objects, graph_estimated_objects;
   std::vector<GraphContact> graph_true_contacts, graph_estimated_contacts;
 

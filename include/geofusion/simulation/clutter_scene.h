@@ -36,6 +36,9 @@ struct ClutterConfig {
   double area_y_m = 0.30;
   double stack_fraction = 0.3;   ///< share of objects dropped onto another object
   double lying_fraction = 0.35;  ///< share dropped lying on a side rather than upright
+  /// Share set down beside an object, standing and tipped towards it, to come to rest leaning
+  /// on it (or fall flat, as physics decides).
+  double lean_fraction = 0.0;
   /// Classes to draw from (empty: the whole model set).
   std::vector<std::string> classes;
   double max_penetration_m = 0.001;  ///< FCL check; larger fails the scene

@@ -44,7 +44,7 @@ struct SuiteSpec {
 
 /// Bumped whenever the generator's output for the same request changes (cached scenes made by
 /// another version are remade).
-constexpr int kGeneratorVersion = 3;
+constexpr int kGeneratorVersion = 4;
 
 /// Every setting of a suite that shapes its data, one line (the cache key of generated scenes).
 std::string describeSuite(const SuiteSpec& suite);

@@ -14,13 +14,14 @@ namespace geofusion {
 /// The paper's contact costs. P2P: omega_q |N_u . N_v + 1| + omega_p |N_u . (C_v - C_u)|, with the
 /// direction term as the vector N_u + N_v (zero at the same minimum, but its gradient does not
 /// vanish there). P2C: omega_q |N_p . N_c| + omega_p |N_p . (C_c - C_p) - r|. C2C: omega_p (axis
-/// distance - (r_u + r_v)). Unused residual entries are 0.
+/// distance - (r_u + r_v)). P2E (beyond the paper): omega_p N_p . (E - C_p), the edge object's
+/// touching point E on the plane. Unused residual entries are 0.
 struct ContactFactor {
   static constexpr int kResiduals = 4;
 
   ContactType type = ContactType::kPlanePlane;
-  /// Features in their models' frames (centre, normal or axis, radius); for P2C `a` is the plane
-  /// and `b` the curve.
+  /// Features in their models' frames (centre, normal or axis, radius); for P2C and P2E `a` is
+  /// the plane and `b` the curve or the touching point (c_b).
   Eigen::Vector3d c_a = Eigen::Vector3d::Zero(), n_a = Eigen::Vector3d::UnitZ();
   Eigen::Vector3d c_b = Eigen::Vector3d::Zero(), n_b = Eigen::Vector3d::UnitZ();
   double r_a = 0.0, r_b = 0.0;
@@ -45,6 +46,10 @@ struct ContactFactor {
         r[0] = T(w_q) * Na.dot(Nb);
         r[1] = T(w_p) * (Na.dot(d) - T(r_b));
         r[2] = r[3] = T(0);
+        break;
+      case ContactType::kPlaneEdge:
+        r[0] = T(w_p) * Na.dot(d);
+        r[1] = r[2] = r[3] = T(0);
         break;
       case ContactType::kCurveCurve: {
         const Eigen::Matrix<T, 3, 1> c = Na.cross(Nb);
