@@ -401,6 +401,10 @@ class Table {
          [f](GeoFusionConfig& c) { return &f(c)->contact_loss; });
     integer("stage_two.max_iterations", 1, 1000, "Ceres iterations",
             [f](GeoFusionConfig& c) { return &f(c)->max_iterations; });
+    flag("stage_two.leaning_contacts", "leaning contacts join stage II (beside the supports)",
+         [f](GeoFusionConfig& c) { return &f(c)->leaning_contacts; });
+    flag("stage_two.side_contacts", "side-by-side contacts join stage II (beside the supports)",
+         [f](GeoFusionConfig& c) { return &f(c)->side_contacts; });
   }
   void background() {
     flag("background.enabled", "build the OctoMap of the static background",

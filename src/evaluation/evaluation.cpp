@@ -32,7 +32,9 @@ MapScore scoreMap(const ClutterScene& scene, const std::vector<ObjectEstimate>& 
     double best = 1e9;
     int best_i = -1;
     for (std::size_t i = 0; i < scene.objects.size(); ++i) {
-      if (taken[i] || !o.model || scene.objects[i].model->name != o.model->name) continue;
+      if (taken[i] || !o.model || !scene.objects[i].presentAtTheEnd() ||
+          scene.objects[i].model->name != o.model->name)
+        continue;
       const double e = addsError(o.model->points, o.T_map_obj, scene.objects[i].T_world_obj);
       if (e < best) best = e, best_i = static_cast<int>(i);
     }

@@ -141,6 +141,7 @@ void evaluateKeyframe(const GroundTruth& gt, const GroundTruthFrame& f, const Ke
   std::vector<Eigen::Isometry3d> truth_poses;
   for (int i = 0; i < n_objects; ++i) {
     const SceneObject& o = gt.scene.objects[static_cast<std::size_t>(i)];
+    if (!o.presentAt(f.index)) continue;  // taken away or not there yet (a changed scene)
     const Eigen::Isometry3d T = T_cam_map_true * o.T_world_obj;
     const Box2d box = projectedBox(o.model->points, T, K);
     if (box.empty()) continue;
@@ -209,10 +210,12 @@ MapScore evaluateFinalMap(const GroundTruth& gt, const std::vector<ObjectEstimat
   const int n_objects = static_cast<int>(gt.scene.objects.size());
   ev->map_objects = static_cast<int>(map.size());
   ev->map_matched = score.true_positives;
-  ev->true_objects = n_objects;
+  ev->true_objects = 0;  // those there at the end
   ev->map_adds_m = score.adds_m;
   for (int i = 0; i < n_objects; ++i) {
     const SceneObject& o = gt.scene.objects[static_cast<std::size_t>(i)];
+    if (!o.presentAtTheEnd()) continue;
+    ++ev->true_objects;
     ev->graph_true_objects.push_back({i, o.model->name, o.T_world_obj.translation(), -1});
   }
   for (std::size_t j = 0; j < aligned.size(); ++j) {
@@ -220,6 +223,15 @@ MapScore evaluateFinalMap(const GroundTruth& gt, const std::vector<ObjectEstimat
                                            aligned[j].T_map_obj.translation(), score.match[j]});
   }
   return score;
+}
+
+// The final map is scored against the scene as it is at the end (a changed scene: without the
+// objects taken away).
+bool bothThereAtTheEnd(const ClutterScene& scene, const FeatureContact& c) {
+  auto there = [&](int i) {
+    return i < 0 || scene.objects[static_cast<std::size_t>(i)].presentAtTheEnd();
+  };
+  return there(c.object_a) && there(c.object_b);
 }
 
 // Every contact of the final map against the truth, per kind, as (object pair, kind) with the
@@ -230,6 +242,7 @@ void evaluateContactKinds(const GroundTruth& gt, const RunResults& results,
                           const std::function<int(int)>& idOf, RunEvaluation* ev) {
   std::set<ContactKey> truth, seen;
   for (const FeatureContact& c : gt.scene.contacts) {
+    if (!bothThereAtTheEnd(gt.scene, c)) continue;
     const ContactKey key = keyOf(c.object_a, c.object_b, toString(c.kind));
     if (!truth.insert(key).second) continue;
     ++ev->contacts_by_kind[static_cast<int>(c.kind)].truth;
@@ -263,7 +276,7 @@ void evaluateContactGraph(const GroundTruth& gt, const RunResults& results, cons
   std::set<int> matched_truth(score.match.begin(), score.match.end());
   matched_truth.insert(-1);
   for (const FeatureContact& c : gt.scene.contacts) {
-    if (!c.support()) continue;
+    if (!c.support() || !bothThereAtTheEnd(gt.scene, c)) continue;
     const ContactKey key = keyOf(c.object_a, c.object_b, shortName(c.type));
     true_pairs.insert(pairOf(key));
     if (!true_keys.insert(key).second) continue;
@@ -429,6 +442,15 @@ std::vector<bool> mappedObjects(const GroundTruth& gt, const KeyframeResult& k,
   return mapped;
 }
 
+// Whether the camera of a keyframe looks at where the object is (or was): its centre in front
+// of the camera and inside the image.
+bool inView(const SceneObject& o, const GroundTruthFrame& f, const PinholeIntrinsics& K) {
+  const Eigen::Vector3d p = f.T_map_optical.inverse() * o.T_world_obj.translation();
+  if (p.z() <= 0.05) return false;
+  const double u = K.fx * p.x() / p.z() + K.cx, v = K.fy * p.y() / p.z() + K.cy;
+  return u >= 0 && v >= 0 && u < K.width && v < K.height;
+}
+
 // Object lifecycle: for every true object, when it enters the online map, how often it leaves and
 // comes back, and whether a well-seen object is lost. Not for FbF (no map that persists).
 void evaluateLifecycle(const GroundTruth& gt, const RunResults& results,
@@ -451,7 +473,12 @@ void evaluateLifecycle(const GroundTruth& gt, const RunResults& results,
       ObjectLifecycle& l = life[i];
       l.object = static_cast<int>(i);
       if (f->visible_fraction[i] >= config.well_seen_min_visible) ++l.well_seen_keyframes;
+      const SceneObject& o = gt.scene.objects[i];
+      if (l.removed_keyframe < 0 && !o.presentAtTheEnd() && f->index >= o.present_until_frame &&
+          inView(o, *f, gt.intrinsics))
+        l.removed_keyframe = t;
       if (mapped[i]) {
+        l.last_mapped = t;
         if (l.first_mapped < 0) l.first_mapped = t;
         if (!was_mapped[i] && absence[i] > 0) ++l.returns;
         absence[i] = 0;
@@ -466,6 +493,13 @@ void evaluateLifecycle(const GroundTruth& gt, const RunResults& results,
   for (int j : score.match)
     if (j >= 0) life[static_cast<std::size_t>(j)].in_final_map = true;
   for (ObjectLifecycle& l : life) {
+    const SceneObject& o = gt.scene.objects[static_cast<std::size_t>(l.object)];
+    if (!o.presentAtTheEnd()) {  // taken away: how long the map kept it
+      l.ghost = l.removed_keyframe >= 0 && l.last_mapped == t - 1;
+      if (l.removed_keyframe >= 0 && !l.ghost)
+        l.removal_latency = std::max(0, l.last_mapped + 1 - l.removed_keyframe);
+      continue;
+    }
     l.lost = l.well_seen_keyframes >= config.well_seen_min_keyframes &&
              (!l.in_final_map || l.longest_absence > config.lost_absence_keyframes);
   }
@@ -616,7 +650,8 @@ bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::s
   json lifecycle = nullptr;
   if (e.has_lifecycle) {
     json objects = json::array();
-    int lost = 0, returns = 0;
+    int lost = 0, returns = 0, removals = 0, ghosts = 0;
+    json latencies = json::array();
     for (const ObjectLifecycle& l : e.lifecycle) {
       objects.push_back({{"object", l.object},
                          {"well_seen_keyframes", l.well_seen_keyframes},
@@ -625,11 +660,19 @@ bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::s
                          {"returns", l.returns},
                          {"longest_absence", l.longest_absence},
                          {"in_final_map", l.in_final_map},
-                         {"lost", l.lost}});
+                         {"lost", l.lost},
+                         {"removed_keyframe", l.removed_keyframe},
+                         {"last_mapped", l.last_mapped},
+                         {"removal_latency", l.removal_latency},
+                         {"ghost", l.ghost}});
       lost += l.lost;
       returns += l.returns;
+      removals += l.removed_keyframe >= 0;
+      ghosts += l.ghost;
+      if (l.removal_latency >= 0) latencies.push_back(l.removal_latency);
     }
-    lifecycle = {{"objects", objects}, {"lost", lost}, {"flip_flops", returns}};
+    lifecycle = {{"objects", objects},   {"lost", lost},     {"flip_flops", returns},
+                 {"removals", removals}, {"ghosts", ghosts}, {"removal_latencies", latencies}};
   }
   j["lifecycle"] = lifecycle;
   j["trajectory"] = {{"ate_rmse_m", e.alignment_rmse_m},

@@ -33,7 +33,9 @@ bool contactPoints(const KeyframeResult& r, const FeatureContact& c, const Objec
     if (index >= static_cast<int>(r.objects.size())) return false;
     const ObjectEstimate& o = r.objects[static_cast<std::size_t>(index)];
     if (!o.model) return false;
-    *out = featureCentre(*o.model, f, o.T_map_obj);
+    // A plane-edge contact's edge side: the touching point of its hull.
+    *out = c.type == ContactType::kPlaneEdge && !f.plane ? o.T_map_obj * c.edge_point
+                                                         : featureCentre(*o.model, f, o.T_map_obj);
     return true;
   };
   return at(c.object_a, c.feature_a, a) && at(c.object_b, c.feature_b, b);
@@ -84,9 +86,17 @@ geofusion::ObjectMap toObjectMapMsg(const KeyframeResult& r, const SupportPlane&
     Eigen::Vector3d a, b;
     if (!contactPoints(r, c, plane_model.get(), T_plane, &a, &b)) continue;
     geofusion::ContactRelation cr;
-    cr.type = c.type == ContactType::kPlanePlane   ? geofusion::ContactRelation::PLANE_PLANE
-              : c.type == ContactType::kPlaneCurve ? geofusion::ContactRelation::PLANE_CURVE
-                                                   : geofusion::ContactRelation::CURVE_CURVE;
+    switch (c.type) {
+      case ContactType::kPlanePlane: cr.type = geofusion::ContactRelation::PLANE_PLANE; break;
+      case ContactType::kPlaneCurve: cr.type = geofusion::ContactRelation::PLANE_CURVE; break;
+      case ContactType::kCurveCurve: cr.type = geofusion::ContactRelation::CURVE_CURVE; break;
+      case ContactType::kPlaneEdge: cr.type = geofusion::ContactRelation::PLANE_EDGE; break;
+    }
+    switch (c.kind) {
+      case ContactKind::kSupport: cr.kind = geofusion::ContactRelation::KIND_SUPPORT; break;
+      case ContactKind::kLeaning: cr.kind = geofusion::ContactRelation::KIND_LEANING; break;
+      case ContactKind::kSide: cr.kind = geofusion::ContactRelation::KIND_SIDE; break;
+    }
     auto id = [&](int index) {
       return index < 0
                  ? static_cast<decltype(messageId(0))>(geofusion::ContactRelation::SUPPORT_PLANE_ID)
@@ -164,10 +174,13 @@ visualization_msgs::MarkerArray mapMarkers(const KeyframeResult& r, const Suppor
   for (const FeatureContact& c : r.contacts) {
     Eigen::Vector3d a, b;
     if (!contactPoints(r, c, plane_model.get(), T_plane, &a, &b)) continue;
-    // P2P magenta, P2C green, C2C cyan.
-    const std_msgs::ColorRGBA colour = colorMsg(c.type == ContactType::kPlanePlane ? 1.0f : 0.1f,
-                                                c.type == ContactType::kPlanePlane ? 0.1f : 1.0f,
-                                                c.type == ContactType::kPlaneCurve ? 0.1f : 1.0f);
+    // P2P magenta, P2C green, C2C cyan, P2E orange.
+    const std_msgs::ColorRGBA colour =
+        c.type == ContactType::kPlaneEdge
+            ? colorMsg(1.0f, 0.55f, 0.0f)
+            : colorMsg(c.type == ContactType::kPlanePlane ? 1.0f : 0.1f,
+                       c.type == ContactType::kPlanePlane ? 0.1f : 1.0f,
+                       c.type == ContactType::kPlaneCurve ? 0.1f : 1.0f);
     Marker arrow = makeMarker(header, kContactNs, contact_id++, Marker::ARROW);
     // An arrow along the contact normal (the support direction for support contacts), ending
     // at the supported feature: it sits where the objects touch and points up into what rests.

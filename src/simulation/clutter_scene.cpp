@@ -290,7 +290,7 @@ bool makeClutterScene(const ModelSet& models, const ClutterConfig& config, unsig
     R = Eigen::AngleAxisd(0.1 * (uni(rng) - 0.5), Eigen::Vector3d::UnitX()) * R;
     Eigen::Vector2d xy(config.area_x_m * (uni(rng) - 0.5), config.area_y_m * (uni(rng) - 0.5));
     double floor_z = top;
-    const double choice = placed.empty() ? 1.0 : uni(rng);  // no draw for the first
+    const double choice = placed.empty() ? 1.0 : uni(rng);    // no draw for the first
     if (!placed.empty() && choice < config.stack_fraction) {  // onto an existing object
       const int k = static_cast<int>(uni(rng) * physics.size()) % static_cast<int>(physics.size());
       xy = physics.pose(k).translation().head<2>() +

@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <random>
 
 #include <cmath>
 #include <cstdio>
@@ -36,6 +37,12 @@ bool suiteByName(const std::string& name, SuiteSpec* suite) {
     for (int k = 0; k < 6; ++k) {
       s.scenes.push_back({name + "_0" + std::to_string(k + 1),
                           static_cast<unsigned>((rgb ? 201 : 101) + k), objects[k]});
+    }
+    if (name == "bench") {  // a changed scene: two objects taken away, two moved (issue 20)
+      SceneSpec changed{"bench_07", 107, 18};
+      changed.removed = 2;
+      changed.moved = 2;
+      s.scenes.push_back(changed);
     }
     s.model_set = "ycb_video";
     s.keyframes = 200;
@@ -135,6 +142,124 @@ bool makeSuiteScene(const SuiteSpec& suite, const SceneSpec& spec, const ModelSe
   return false;
 }
 
+std::string SceneSpec::describeChanges() const {
+  if (removed == 0 && moved == 0) return "";
+  std::ostringstream o;
+  o << "; changes " << removed << " removed " << moved << " moved at " << change_at;
+  return o.str();
+}
+
+namespace {
+
+// Objects whose only contacts with other objects are their own supports (nothing rests or leans
+// on them), and among them those whose only contact is the table's support.
+void changeableObjects(const ClutterScene& scene, std::vector<int>* removable,
+                       std::vector<int>* movable) {
+  const int n = static_cast<int>(scene.objects.size());
+  for (int i = 0; i < n; ++i) {
+    bool carries = false, only_table = true;
+    for (const FeatureContact& c : scene.contacts) {
+      if (c.object_a != i && c.object_b != i) continue;
+      const int other = c.object_a == i ? c.object_b : c.object_a;
+      if (!(c.support() && c.object_b == i)) carries |= other >= 0;
+      only_table &= other == -1 && c.support();
+    }
+    if (carries) continue;
+    removable->push_back(i);
+    if (only_table) movable->push_back(i);
+  }
+}
+
+// A free place on the table for object i: its footprint circle (about its origin, as it stands)
+// 2 cm clear of every object there at the end and of its old place, 5 cm inside the table's edges.
+double footprint(const SceneObject& o) {
+  double r = 0.0;
+  for (const auto& v : o.model->mesh.vertices)
+    r = std::max(r, (o.T_world_obj.linear() * v.cast<double>()).head<2>().norm());
+  return r;
+}
+
+bool freeSpot(const ClutterScene& scene, int i, std::mt19937* rng, Eigen::Vector2d* xy) {
+  const SceneObject& moving = scene.objects[static_cast<std::size_t>(i)];
+  const double r = footprint(moving);
+  std::uniform_real_distribution<double> ux(-0.5 * scene.table.size_x_m + 0.05 + r,
+                                            0.5 * scene.table.size_x_m - 0.05 - r);
+  std::uniform_real_distribution<double> uy(-0.5 * scene.table.size_y_m + 0.05 + r,
+                                            0.5 * scene.table.size_y_m - 0.05 - r);
+  for (int attempt = 0; attempt < 500; ++attempt) {
+    const Eigen::Vector2d p(ux(*rng), uy(*rng));
+    bool clear = (p - moving.T_world_obj.translation().head<2>()).norm() > 2 * r + 0.02;
+    for (const SceneObject& o : scene.objects) {
+      if (!clear) break;
+      if (&o == &moving || !o.presentAtTheEnd()) continue;
+      clear = (p - o.T_world_obj.translation().head<2>()).norm() > r + footprint(o) + 0.02;
+    }
+    if (clear) {
+      *xy = p;
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+bool applySceneChanges(const SceneSpec& spec, int frames, const ClutterConfig& clutter,
+                       ClutterScene* scene, std::string* report) {
+  if (spec.removed == 0 && spec.moved == 0) return true;
+  std::vector<int> removable, movable;
+  changeableObjects(*scene, &removable, &movable);
+  std::mt19937 rng(spec.seed + 3000);
+  // The smallest first: the table around dense clutter has room for a can, seldom for a box.
+  std::shuffle(movable.begin(), movable.end(), rng);
+  std::stable_sort(movable.begin(), movable.end(), [&](int a, int b) {
+    return footprint(scene->objects[static_cast<std::size_t>(a)]) <
+           footprint(scene->objects[static_cast<std::size_t>(b)]);
+  });
+  if (static_cast<int>(movable.size()) < spec.moved) {
+    if (report) *report = "too few objects stand on the table alone to move";
+    return false;
+  }
+  const int change = static_cast<int>(std::lround(spec.change_at * (frames - 1)));
+  std::ostringstream log;
+  std::vector<int> changed;
+  for (int m = 0; m < spec.moved; ++m) {
+    const int i = movable[static_cast<std::size_t>(m)];
+    Eigen::Vector2d xy;
+    if (!freeSpot(*scene, i, &rng, &xy)) {
+      if (report)
+        *report = "no free spot on the table to move " +
+                  scene->objects[static_cast<std::size_t>(i)].model->name + " to";
+      return false;
+    }
+    SceneObject copy = scene->objects[static_cast<std::size_t>(i)];
+    copy.T_world_obj.translation().head<2>() = xy;
+    copy.present_from_frame = change;
+    scene->objects[static_cast<std::size_t>(i)].present_until_frame = change;
+    scene->objects.push_back(copy);
+    changed.push_back(i);
+    log << (log.tellp() > 0 ? ", " : "") << copy.model->name << " #" << i << " moved to #"
+        << scene->objects.size() - 1;
+  }
+  std::shuffle(removable.begin(), removable.end(), rng);
+  int removed = 0;
+  for (int i : removable) {
+    if (removed == spec.removed) break;
+    if (std::find(changed.begin(), changed.end(), i) != changed.end()) continue;
+    scene->objects[static_cast<std::size_t>(i)].present_until_frame = change;
+    log << (log.tellp() > 0 ? ", " : "") << scene->objects[static_cast<std::size_t>(i)].model->name
+        << " #" << i << " taken away";
+    ++removed;
+  }
+  if (removed < spec.removed) {
+    if (report) *report = "too few objects carry nothing to take away";
+    return false;
+  }
+  scene->contacts = groundTruthContacts(*scene, clutter);
+  if (report) *report = "at frame " + std::to_string(change) + ": " + log.str();
+  return true;
+}
+
 // --------------------------------------------------------------------------------------------
 // Ground-truth YAML.
 namespace {
@@ -193,6 +318,10 @@ bool writeGroundTruth(const std::string& path, const GroundTruth& gt, std::strin
     out << YAML::Key << "class_name" << YAML::Value << o.model->name;
     out << YAML::Key << "class_id" << YAML::Value << o.model->id;
     yaml_io::emitPose(out, "pose", o.T_world_obj);
+    if (o.present_from_frame != 0)
+      out << YAML::Key << "present_from_frame" << YAML::Value << o.present_from_frame;
+    if (!o.presentAtTheEnd())
+      out << YAML::Key << "present_until_frame" << YAML::Value << o.present_until_frame;
     out << YAML::EndMap;
   }
   out << YAML::EndSeq;
@@ -297,6 +426,8 @@ bool readGroundTruth(const std::string& path, const ModelSet& models, GroundTrut
       for (const auto& m : models.models())
         if (m.get() == model) obj.model = m;
       obj.T_world_obj = yaml_io::parsePose(o["pose"], "object pose");
+      obj.present_from_frame = o["present_from_frame"].as<int>(0);
+      obj.present_until_frame = o["present_until_frame"].as<int>(-1);
       g.scene.objects.push_back(obj);
     }
     g.scene.max_penetration_m = root["max_penetration_m"].as<double>(0.0);

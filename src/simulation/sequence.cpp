@@ -359,10 +359,10 @@ struct SequenceRenderer::Draws {
 
 SequenceFrame SequenceRenderer::render(const FramePose& pose, const DepthNoise& depth_noise,
                                        const DetectorModel& detector, const ModelSet& models,
-                                       std::mt19937& rng) {
+                                       std::mt19937& rng, int frame) {
   SequenceFrame f;
   const Eigen::Isometry3d T_cam_map = pose.T_map_optical.inverse();
-  const std::vector<RenderItem> items = sceneItems(T_cam_map);
+  const std::vector<RenderItem> items = sceneItems(T_cam_map, frame);
   renderer_.render(
       K_, items, &f.images, PixelBox{},
       OffscreenRenderer::kDepth | OffscreenRenderer::kInstance | OffscreenRenderer::kColor);
@@ -392,7 +392,8 @@ void SequenceRenderer::stepPersistentErrors(const DetectorModel& detector, const
 }
 
 // What the camera sees: the table, the floor and the objects (instance ids: object index + 1).
-std::vector<RenderItem> SequenceRenderer::sceneItems(const Eigen::Isometry3d& T_cam_map) const {
+std::vector<RenderItem> SequenceRenderer::sceneItems(const Eigen::Isometry3d& T_cam_map,
+                                                     int frame) const {
   std::vector<RenderItem> items;
   RenderItem table;
   table.mesh = table_mesh_;
@@ -407,6 +408,7 @@ std::vector<RenderItem> SequenceRenderer::sceneItems(const Eigen::Isometry3d& T_
   floor.color = Eigen::Vector3f(0.45f, 0.45f, 0.48f);
   items.push_back(floor);
   for (std::size_t i = 0; i < scene_.objects.size(); ++i) {
+    if (!scene_.objects[i].presentAt(frame)) continue;
     RenderItem it;
     it.mesh = object_meshes_[i];
     it.T_cam_model = T_cam_map * scene_.objects[i].T_world_obj;

@@ -66,7 +66,7 @@ OURS = 'GeoFusion'
 BASELINE = 'FbF'
 SCORE_THRESHOLD = 0.5
 STAGES = ['consistency', 'association', 'stage_one', 'relations', 'stage_two']
-CONTACT_COLOURS = {'P2P': 'tab:blue', 'P2C': 'tab:orange', 'C2C': 'tab:green'}
+CONTACT_COLOURS = {'P2P': 'tab:blue', 'P2C': 'tab:orange', 'C2C': 'tab:green', 'P2E': 'tab:red'}
 
 # The paper's figures: Table I (mAP, percent) and Table II (precision / recall at score 0.5).
 PAPER = {
@@ -439,10 +439,20 @@ def lifecycle_figures(evals):
     method without a persistent map)."""
     lc = [ev.get('lifecycle') for ev in evals]
     if not lc or any(x is None for x in lc):
-        return {'lifecycle_lost': None, 'lifecycle_flip_flops': None, 'lifecycle_objects': None}
+        return {'lifecycle_lost': None, 'lifecycle_flip_flops': None, 'lifecycle_objects': None,
+                'removals': None, 'removal_ghosts': None, 'removal_latency_max': None,
+                'removal_latency_mean': None}
+    # Changed scenes: objects taken away (or moved: the old place), keyframes until the map let
+    # them go, and those it kept (ghosts).
+    latencies = [int(v) for x in lc for v in x.get('removal_latencies') or []]
+    removals = sum(int(x.get('removals') or 0) for x in lc)
     return {'lifecycle_lost': sum(int(x.get('lost') or 0) for x in lc),
             'lifecycle_flip_flops': sum(int(x.get('flip_flops') or 0) for x in lc),
-            'lifecycle_objects': sum(len(x.get('objects') or []) for x in lc)}
+            'lifecycle_objects': sum(len(x.get('objects') or []) for x in lc),
+            'removals': removals,
+            'removal_ghosts': sum(int(x.get('ghosts') or 0) for x in lc),
+            'removal_latency_max': max(latencies) if latencies else None,
+            'removal_latency_mean': float(np.mean(latencies)) if latencies else None}
 
 
 def class_recall(evals):
@@ -635,6 +645,14 @@ def _persistent_suite_targets(methods, add, suite=None):
                 'n/a (not measured)')
         else:
             add(target, '%.3f' % f1, f1 >= bound, '%.3f' % (bound - f1))
+    if ours.get('removals'):
+        latency, ghosts = ours.get('removal_latency_max'), ours.get('removal_ghosts')
+        target = 'changed scenes: %s lets every object taken away go within 5 keyframes' % OURS
+        measured = '%d removals, %d ghosts, latency max %s keyframes' % (
+            ours['removals'], ghosts, 'n/a' if latency is None else latency)
+        add(target, measured, ghosts == 0 and latency is not None and latency <= 5,
+            '%d ghosts' % ghosts if ghosts else '%s keyframes' % (
+                'n/a' if latency is None else latency - 5))
     phantoms, swaps = ours.get('surviving_phantoms'), ours.get('surviving_swaps')
     target = 'persistent phantoms and swapped classes in the final maps: %s none' % OURS
     if phantoms is None or swaps is None:
@@ -995,6 +1013,14 @@ def write_report(summary, out_dir, figures, command):
            'the final map or out of the map for more than 10 keyframes after it entered; flip-flops'
            ' = returns after leaving):', ''] + _table(['method', 'lost', 'flip-flops',
                                                      'true objects'], rows) + ['']
+    if any(m.get('removals') for m in methods.values()):
+        rows = [[n, str(m['removals']), _num(m['removal_latency_mean'], 1),
+                 _int(m['removal_latency_max']), str(m['removal_ghosts'])]
+                for n, m in methods.items() if m.get('removals') is not None]
+        md += ['Changed scenes (objects taken away, or moved: their old place): keyframes from the '
+               'first keyframe after the change until the map let the object go, and the objects '
+               'it still has at the end (ghosts):', ''] + _table(
+                   ['method', 'removals', 'latency mean', 'latency max', 'ghosts'], rows) + ['']
 
     md += ['## The detector\'s persistent errors and the camera trajectory', '',
            'Phantoms: false objects the detector reports at one place in at least 5 keyframes; '

@@ -214,8 +214,9 @@ int main(int argc, char** argv) {
     const std::string bag_path = opt.out_dir + "/" + spec.name + ".bag";
     const std::string gt_path = opt.out_dir + "/" + spec.name + "_gt.yaml";
     const std::string stamp_path = opt.out_dir + "/" + spec.name + ".request";
+    const std::string scene_request = request.str() + spec.describeChanges();
     if (!opt.force && exists(bag_path) && exists(gt_path) &&
-        readFile(stamp_path) == request.str()) {
+        readFile(stamp_path) == scene_request) {
       std::cout << "  " << spec.name << ": cached (" << bag_path << "; --force remakes it)\n";
       continue;
     }
@@ -227,6 +228,11 @@ int main(int argc, char** argv) {
       std::cerr << "generate_dataset: " << spec.name << ": " << report << "\n";
       return 1;
     }
+    if (!applySceneChanges(spec, suite.cameraFrames(), suite.clutter, &gt.scene, &report)) {
+      std::cerr << "generate_dataset: " << spec.name << ": " << report << "\n";
+      return 1;
+    }
+    if (spec.removed + spec.moved > 0) std::cout << "  " << spec.name << ": " << report << "\n";
     const ClutterScene& scene = gt.scene;
     if (gt.scene_seed != spec.seed) {
       std::cout << "  " << spec.name << ": seed " << spec.seed
@@ -287,7 +293,8 @@ int main(int argc, char** argv) {
       g.T_map_optical = pose.T_map_optical;
       g.keyframe = suite.isKeyframe(static_cast<int>(k));
       if (g.keyframe) {
-        const SequenceFrame f = renderer.render(pose, suite.depth, suite.detector, models, rng);
+        const SequenceFrame f =
+            renderer.render(pose, suite.depth, suite.detector, models, rng, static_cast<int>(k));
         writer.writeImages(stamp, K, f.images.rgb, f.images.depth);
         // A detector answers after its processing time; the header keeps the image stamp.
         writer.writeDetections(stamp, stamp + ros::Duration(0.1), f.detections);
@@ -319,7 +326,7 @@ int main(int argc, char** argv) {
       std::cerr << "generate_dataset: cannot rename " << bag_path << ".tmp\n";
       return 1;
     }
-    std::ofstream(stamp_path) << request.str();
+    std::ofstream(stamp_path) << scene_request;
     int support = 0;
     for (const auto& c : scene.contacts) support += c.support();
     const double seconds = std::chrono::duration<double>(Clock::now() - start).count();

@@ -184,6 +184,45 @@ TEST_F(RunEvaluationTest, ObjectLifecycleCountsDeparturesReturnsAndLosses) {
   EXPECT_FALSE(ev.has_lifecycle);
 }
 
+// A changed scene: the brick is taken away at camera frame 6 (keyframe 1). Kept in the map at
+// keyframe 1 and gone at keyframe 2, it took one keyframe to let go; kept to the end, it is a
+// ghost. Either way the final map is scored against the box alone, and the brick's contact with
+// the table is no longer true.
+TEST_F(RunEvaluationTest, AnObjectTakenAwayIsScoredByHowLongTheMapKeptIt) {
+  gt.scene.objects[1].present_until_frame = 6;
+  results.keyframes[2].objects.pop_back();
+  results.final_map = results.keyframes.back();
+  results.final_map.contacts = {gt.scene.contacts[0]};
+  RunEvaluation ev = evaluate();
+  ASSERT_TRUE(ev.has_lifecycle);
+  const ObjectLifecycle& brick = ev.lifecycle[1];
+  EXPECT_EQ(brick.removed_keyframe, 1);
+  EXPECT_EQ(brick.last_mapped, 1);
+  EXPECT_EQ(brick.removal_latency, 1);
+  EXPECT_FALSE(brick.ghost);
+  EXPECT_FALSE(brick.lost);
+  EXPECT_EQ(ev.true_objects, 1);
+  EXPECT_EQ(ev.map_matched, 1);
+  EXPECT_EQ(ev.true_contacts, 1);
+  EXPECT_EQ(ev.correct_contacts, 1);
+  // No ground-truth box for the brick after it left.
+  for (const GroundTruthBox& g : ev.ground_truth) EXPECT_FALSE(g.object == 1 && g.image == 2);
+  // Gone at once: latency 0.
+  results.keyframes[1].objects.pop_back();
+  EXPECT_EQ(evaluate().lifecycle[1].removal_latency, 0);
+  // Kept to the end: a ghost, and a false object of the final map.
+  models.clear();
+  gt = GroundTruth();
+  results = RunResults();
+  SetUp();
+  gt.scene.objects[1].present_until_frame = 6;
+  ev = evaluate();
+  EXPECT_TRUE(ev.lifecycle[1].ghost);
+  EXPECT_EQ(ev.lifecycle[1].removal_latency, -1);
+  EXPECT_EQ(ev.map_objects, 2);
+  EXPECT_EQ(ev.map_matched, 1);
+}
+
 TEST_F(RunEvaluationTest, PerfectEstimatesMatchEverythingWithZeroError) {
   const RunEvaluation ev = evaluate();
   ASSERT_EQ(ev.images.size(), 3u);

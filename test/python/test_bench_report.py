@@ -323,6 +323,25 @@ class PersistentErrorMetricsTest(unittest.TestCase):
         self.assertIn('mAP50:95: GeoFusion >= 1.6 x FbF', targets)
         self.assertNotIn('lost objects: GeoFusion none', targets)
 
+    def test_removals_of_changed_scenes(self):
+        a = make_eval(scene='s1')
+        a['lifecycle'] = {'lost': 0, 'flip_flops': 0, 'objects': [{}] * 4, 'removals': 3,
+                          'ghosts': 1, 'removal_latencies': [0, 4]}
+        b = make_eval(scene='s2')
+        b['lifecycle'] = {'lost': 0, 'flip_flops': 0, 'objects': [{}] * 4}  # a static scene
+        f = bench_report.lifecycle_figures([a, b])
+        self.assertEqual((f['removals'], f['removal_ghosts'], f['removal_latency_max']), (3, 1, 4))
+        self.assertAlmostEqual(f['removal_latency_mean'], 2.0)
+        summary = bench_report.summarize([a, b], 'bench', 'x')
+        target = [t for t in summary['targets'] if t['target'].startswith('changed scenes')]
+        self.assertEqual(len(target), 1)
+        self.assertFalse(target[0]['met'])  # a ghost
+        self.assertEqual(target[0]['measured'], '3 removals, 1 ghosts, latency max 4 keyframes')
+        # Static scenes only: no figure, no target.
+        f = bench_report.lifecycle_figures([b])
+        self.assertEqual(f['removals'], 0)
+        self.assertIsNone(f['removal_latency_max'])
+
 
 def write_evals(directory, evals):
     for ev in evals:

@@ -23,14 +23,17 @@ TEST(Suites, DemoAndBenchAreDefinedAndConsistent) {
   EXPECT_FALSE(suiteByName("nonsense", &other));
   EXPECT_EQ(demo.model_set, "primitives");
   EXPECT_EQ(demo.scenes.size(), 1u);
-  ASSERT_EQ(bench.scenes.size(), 6u);
+  ASSERT_EQ(bench.scenes.size(), 7u);  // six static scenes and one that changes
   double objects = 0;
   for (const auto& s : bench.scenes) {
     EXPECT_GE(s.num_objects, 8);
     EXPECT_LE(s.num_objects, 20);
     objects += s.num_objects;
   }
-  EXPECT_NEAR(objects / 6.0, 18.0, 1.0);
+  EXPECT_NEAR(objects / 7.0, 18.0, 1.0);
+  EXPECT_EQ(bench.scenes[6].removed + bench.scenes[6].moved, 4);
+  EXPECT_FALSE(bench.scenes[6].describeChanges().empty());
+  EXPECT_TRUE(bench.scenes[0].describeChanges().empty());
   EXPECT_EQ(bench.keyframes, 200);
   // Keyframes are the frames with images; the trajectory covers every camera frame.
   EXPECT_EQ(bench.trajectory.frames, bench.cameraFrames());
@@ -164,6 +167,63 @@ TEST_F(GroundTruthTest, RoundTripKeepsEverything) {
   }
   EXPECT_EQ(keyframes, 3);
   std::remove(path.c_str());
+}
+
+// A changed scene: one object taken away and one moved at the middle frame. The renderer no
+// longer shows them after it (the moved one shows at its new place), and the ground truth keeps
+// when each object is there.
+TEST_F(GroundTruthTest, SceneChangesTakeObjectsAwayAndMoveThem) {
+  SceneSpec spec = suite_.scenes[0];
+  spec.removed = 1;
+  spec.moved = 1;
+  const int n = static_cast<int>(gt_.scene.objects.size());
+  std::string report;
+  ASSERT_TRUE(applySceneChanges(spec, 11, suite_.clutter, &gt_.scene, &report)) << report;
+  ASSERT_EQ(static_cast<int>(gt_.scene.objects.size()), n + 1);  // the moved one's copy
+  const SceneObject& copy = gt_.scene.objects.back();
+  EXPECT_EQ(copy.present_from_frame, 5);
+  int gone = 0, moved = -1;
+  for (int i = 0; i < n; ++i) {
+    const SceneObject& o = gt_.scene.objects[static_cast<std::size_t>(i)];
+    if (o.presentAtTheEnd()) continue;
+    EXPECT_EQ(o.present_until_frame, 5);
+    ++gone;
+    if (o.model == copy.model &&
+        (o.T_world_obj.translation() - copy.T_world_obj.translation()).norm() > 0.05)
+      moved = i;
+  }
+  EXPECT_EQ(gone, 2);
+  ASSERT_GE(moved, 0) << report;
+  // The copy stands on the table where it was set down; the contact graph knows it.
+  bool on_table = false;
+  for (const FeatureContact& c : gt_.scene.contacts)
+    on_table |= c.object_a == -1 && c.object_b == n && c.support();
+  EXPECT_TRUE(on_table);
+  // Rendered before and after the change: the old place empties, the new one fills.
+  SequenceRenderer renderer(gt_.scene, gt_.intrinsics);
+  ASSERT_TRUE(renderer.ok());
+  std::mt19937 rng(5);
+  FramePose pose = poses_[0];
+  const SequenceFrame before =
+      renderer.render(pose, DepthNoise(), DetectorModel::denseFusion(), models_, rng, 0);
+  const SequenceFrame after =
+      renderer.render(pose, DepthNoise(), DetectorModel::denseFusion(), models_, rng, 6);
+  EXPECT_GT(before.visible_pixels[static_cast<std::size_t>(moved)], 0);
+  EXPECT_EQ(after.visible_pixels[static_cast<std::size_t>(moved)], 0);
+  EXPECT_EQ(before.visible_pixels[static_cast<std::size_t>(n)], 0);
+  for (int t : after.detection_truth) EXPECT_NE(t, moved);
+  // The ground truth file keeps the times (the fixture's frames saw the scene before the change).
+  gt_.frames.clear();
+  const std::string path = tempPath("changed_gt.yaml");
+  std::string error;
+  ASSERT_TRUE(writeGroundTruth(path, gt_, &error)) << error;
+  GroundTruth back;
+  ASSERT_TRUE(readGroundTruth(path, models_, &back, &error)) << error;
+  ASSERT_EQ(back.scene.objects.size(), gt_.scene.objects.size());
+  for (std::size_t i = 0; i < back.scene.objects.size(); ++i) {
+    EXPECT_EQ(back.scene.objects[i].present_from_frame, gt_.scene.objects[i].present_from_frame);
+    EXPECT_EQ(back.scene.objects[i].present_until_frame, gt_.scene.objects[i].present_until_frame);
+  }
 }
 
 TEST_F(GroundTruthTest, BrokenFilesAreRefusedWithAReason) {

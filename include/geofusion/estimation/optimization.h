@@ -113,6 +113,12 @@ struct StageTwoConfig {
   double contact_sigma_direction = 0.01;    ///< omega_q (unit-vector residual)
   RobustLoss contact_loss{"huber", 3.0};
   int max_iterations = 15;
+  /// Which contacts beside the supports join stage II (the paper's has supports only). Side
+  /// contacts stay out by default: between estimates a few millimetres apart they pull
+  /// neighbours together and push partial duplicates apart before they can be merged (on
+  /// `bench`, more flip-flops: docs/BENCHMARK.md).
+  bool leaning_contacts = true;
+  bool side_contacts = false;
 };
 
 struct StageTwoSummary {

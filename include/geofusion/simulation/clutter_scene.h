@@ -28,6 +28,15 @@ struct TableSpec {
 struct SceneObject {
   std::shared_ptr<const ObjectModel> model;
   Eigen::Isometry3d T_world_obj = Eigen::Isometry3d::Identity();
+  /// A changed scene (SceneSpec::removed, ::moved): the camera frames the object is there,
+  /// [present_from_frame, present_until_frame); -1: to the end. A moved object is two objects,
+  /// one until the change and one from it.
+  int present_from_frame = 0;
+  int present_until_frame = -1;
+  bool presentAt(int frame) const {
+    return frame >= present_from_frame && (present_until_frame < 0 || frame < present_until_frame);
+  }
+  bool presentAtTheEnd() const { return present_until_frame < 0; }
 };
 
 struct ClutterConfig {

@@ -17,6 +17,13 @@ struct SceneSpec {
   std::string name;  ///< file stem, e.g. "bench_01"
   unsigned seed = 1;
   int num_objects = 12;
+  /// A changed scene (issue 20): at camera frame change_at x frames, `removed` objects are taken
+  /// away and `moved` ones set down elsewhere on the table (applySceneChanges).
+  int removed = 0;
+  int moved = 0;
+  double change_at = 0.5;
+  /// What makes the changes, for the cache key ("" for a static scene).
+  std::string describeChanges() const;
 };
 
 /// Everything that makes a suite; deterministic for the scene seeds.
@@ -92,6 +99,14 @@ struct GroundTruth {
   std::vector<PhantomObject> phantoms;  ///< the detector's persistent false objects
   std::vector<GroundTruthFrame> frames;
 };
+
+/// Applies the spec's changes to a settled scene whose sequence has `frames` camera frames: objects
+/// nothing rests or leans on are taken away (present until the change); objects that stand on
+/// the table alone are moved (the original until the change, a copy at a free spot of the table
+/// from it). The contact graph is made again. False (with `report`) when too few objects qualify
+/// or no free spot is found; nothing to do for a static spec.
+bool applySceneChanges(const SceneSpec& spec, int frames, const ClutterConfig& clutter,
+                       ClutterScene* scene, std::string* report);
 
 /// Writes the ground-truth YAML atomically (temporary file, then rename).
 bool writeGroundTruth(const std::string& path, const GroundTruth& gt, std::string* error);

@@ -170,8 +170,10 @@ class SequenceRenderer {
   bool ok() const { return renderer_.ok(); }
   const PinholeIntrinsics& intrinsics() const { return K_; }
 
+  /// Camera frame `frame` (which objects are there, SceneObject::presentAt).
   SequenceFrame render(const FramePose& pose, const DepthNoise& depth_noise,
-                       const DetectorModel& detector, const ModelSet& models, std::mt19937& rng);
+                       const DetectorModel& detector, const ModelSet& models, std::mt19937& rng,
+                       int frame = 0);
 
   /// The sequence's persistent phantoms (none before the first frame, or for a detector without
   /// them); detection_truth -2 - k refers to entry k.
@@ -179,7 +181,8 @@ class SequenceRenderer {
 
  private:
   struct Draws;
-  std::vector<RenderItem> sceneItems(const Eigen::Isometry3d& T_cam_map) const;
+  /// The objects there at camera frame `frame` (SceneObject::presentAt).
+  std::vector<RenderItem> sceneItems(const Eigen::Isometry3d& T_cam_map, int frame) const;
   std::vector<PixelBox> measureVisibility(const std::vector<RenderItem>& items,
                                           SequenceFrame* frame);
   void stepPersistentErrors(const DetectorModel& detector, const ModelSet& models,
