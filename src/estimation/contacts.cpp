@@ -348,8 +348,11 @@ std::vector<FeatureContact> findAllContacts(const std::vector<PosedModel>& objec
       const bool was_held =
           std::find(held.begin(), held.end(),
                     ObjectPair(static_cast<int>(i), static_cast<int>(j))) != held.end();
-      const auto c = findContacts(objects, static_cast<int>(i), static_cast<int>(j), gravity,
-                                  was_held ? held_config : config);
+      auto c = findContacts(objects, static_cast<int>(i), static_cast<int>(j), gravity, config);
+      if (c.empty() && was_held) {
+        c = findContacts(objects, static_cast<int>(i), static_cast<int>(j), gravity, held_config);
+        for (FeatureContact& h : c) h.held = true;
+      }
       out.insert(out.end(), c.begin(), c.end());
     }
   }

@@ -329,7 +329,7 @@ StageTwoSummary optimizeStageTwo(std::vector<Eigen::Isometry3d>* T_world_obj,
   };
   bool uses_constants = false;
   for (const FeatureContact& c : contacts) {
-    if ((c.kind == ContactKind::kLeaning && !config.leaning_contacts) ||
+    if (c.held || (c.kind == ContactKind::kLeaning && !config.leaning_contacts) ||
         (c.kind == ContactKind::kSide && !config.side_contacts))
       continue;
     PoseBlock *a = block(c.object_a), *b = block(c.object_b);

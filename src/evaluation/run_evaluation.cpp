@@ -494,7 +494,8 @@ void evaluateLifecycle(const GroundTruth& gt, const RunResults& results,
     if (j >= 0) life[static_cast<std::size_t>(j)].in_final_map = true;
   for (ObjectLifecycle& l : life) {
     const SceneObject& o = gt.scene.objects[static_cast<std::size_t>(l.object)];
-    if (!o.presentAtTheEnd()) {  // taken away: how long the map kept it
+    if (!o.presentAtTheEnd()) {                         // taken away: how long the map kept it
+      if (l.first_mapped < 0) l.removed_keyframe = -1;  // never mapped: nothing to let go
       l.ghost = l.removed_keyframe >= 0 && l.last_mapped == t - 1;
       if (l.removed_keyframe >= 0 && !l.ghost)
         l.removal_latency = std::max(0, l.last_mapped + 1 - l.removed_keyframe);

@@ -196,6 +196,12 @@ TEST(Contacts, AHeldContactHasLooserThresholds) {
   const auto held = findAllContacts(objects, kGravity, cfg, {{0, 1}});
   ASSERT_EQ(held.size(), 1u);
   EXPECT_NEAR(held[0].distance_residual, 0.007, 1e-6);
+  EXPECT_TRUE(held[0].held);  // reported, not a constraint for stage II
+  // Within the thresholds of a new contact, a held pair's contact is an ordinary one.
+  const std::vector<PosedModel> near = {objects[0], {&box, at(0, 0, 0.053)}};
+  const auto again = findAllContacts(near, kGravity, cfg, {{0, 1}});
+  ASSERT_EQ(again.size(), 1u);
+  EXPECT_FALSE(again[0].held);
   cfg.hysteresis = 1.0;
   EXPECT_TRUE(findAllContacts(objects, kGravity, cfg, {{0, 1}}).empty());
   const std::vector<PosedModel> far = {objects[0], {&box, at(0, 0, 0.060)}};

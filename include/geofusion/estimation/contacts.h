@@ -47,6 +47,9 @@ struct FeatureContact {
   double direction_residual = 0.0;  ///< the paper's direction term (0 = perfectly aligned)
   double distance_residual = 0.0;   ///< the paper's distance term, metres (signed: > 0 apart)
   ContactKind kind = ContactKind::kSupport;
+  /// Kept only by the hysteresis (a pair in contact at the last keyframe, beyond the thresholds
+  /// of a new contact): reported, so that it does not blink, but no constraint for stage II.
+  bool held = false;
   /// Plane-edge: the touching point of the hull of the object without the plane, in its model
   /// frame.
   Eigen::Vector3d edge_point = Eigen::Vector3d::Zero();
@@ -71,7 +74,8 @@ struct ContactConfig {
   /// degrees; leaning otherwise.
   double side_max_tilt_deg = 20.0;
   /// Hysteresis: a pair in contact at the previous keyframe keeps it with the distance and
-  /// direction thresholds multiplied by this (>= 1), so a contact does not blink.
+  /// direction thresholds multiplied by this (>= 1), so a contact does not blink (such a contact
+  /// is marked `held`: stage II leaves it out).
   double hysteresis = 1.5;
   /// Projection-overlap check: the features' 2D outlines must overlap by at least this, metres
   /// (negative tolerates a gap).
