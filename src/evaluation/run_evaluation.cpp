@@ -781,10 +781,11 @@ std::string summarize(const RunEvaluation& e) {
                   e.estimated_contacts, e.correct_contacts, e.correct_contact_pairs,
                   e.estimated_contact_pairs, e.true_contacts, e.true_contacts_between_matched);
     s << line;
-    s << "  contacts per kind (found, true of them, true):";
+    s << "  every contact per kind, found / true of them / true:";
     for (ContactKind k : {ContactKind::kSupport, ContactKind::kLeaning, ContactKind::kSide}) {
       const ContactCounts& n = e.contacts_by_kind[static_cast<int>(k)];
-      s << " " << toString(k) << " " << n.estimated << ", " << n.correct << ", " << n.truth;
+      s << (k == ContactKind::kSupport ? " " : ", ") << toString(k) << " " << n.estimated << " / "
+        << n.correct << " / " << n.truth;
     }
     s << "\n";
   }
