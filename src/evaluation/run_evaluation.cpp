@@ -65,13 +65,20 @@ struct Plane {
   double h = 0.0;
 };
 
-// Height of the object's lowest mesh vertex above the plane (negative: below it).
-double lowestAbove(const ObjectModel& model, const Eigen::Isometry3d& T, const Plane& plane) {
-  double lowest = std::numeric_limits<double>::infinity();
+// Heights of the object's lowest and highest hull vertices above the plane (negative: below).
+std::pair<double, double> heightsAbove(const ObjectModel& model, const Eigen::Isometry3d& T,
+                                       const Plane& plane) {
+  double lowest = std::numeric_limits<double>::infinity(), highest = -lowest;
   const TriangleMesh& mesh = model.collision_hull.empty() ? model.mesh : model.collision_hull;
-  for (const auto& v : mesh.vertices)
-    lowest = std::min(lowest, plane.n.dot(T * v.cast<double>()) - plane.h);
-  return lowest;
+  for (const auto& v : mesh.vertices) {
+    const double h = plane.n.dot(T * v.cast<double>()) - plane.h;
+    lowest = std::min(lowest, h), highest = std::max(highest, h);
+  }
+  return {lowest, highest};
+}
+
+double lowestAbove(const ObjectModel& model, const Eigen::Isometry3d& T, const Plane& plane) {
+  return heightsAbove(model, T, plane).first;
 }
 
 double boundingRadius(const ObjectModel& model) {
@@ -394,8 +401,11 @@ void evaluatePlausibility(const GroundTruth& gt, const RunResults& results, cons
   std::vector<double> radius;
   for (const ObjectEstimate& o : map) radius.push_back(boundingRadius(*o.model));
   for (std::size_t i = 0; i < map.size(); ++i) {
-    const double low = lowestAbove(*map[i].model, map[i].T_map_obj, table);
-    if (low < config.touch_distance_m) ev->penetration_m.push_back(std::max(0.0, -low));
+    // Into the table: an object that reaches through its top surface. One wholly below it (a
+    // stray estimate on the floor) does not interpenetrate the table; it is a false object.
+    const auto [low, high] = heightsAbove(*map[i].model, map[i].T_map_obj, table);
+    if (low < config.touch_distance_m && high > 0.0)
+      ev->penetration_m.push_back(std::max(0.0, -low));
     for (std::size_t j = i + 1; j < map.size(); ++j) {
       const double centres =
           (map[i].T_map_obj.translation() - map[j].T_map_obj.translation()).norm();

@@ -397,9 +397,16 @@ TEST_F(RunEvaluationTest, TheOdometrysTrajectoryErrorIsMeasuredBesideTheMethods)
 TEST_F(RunEvaluationTest, SunkAndFloatingObjectsGiveTheirDepthAndGap) {
   results.final_map.objects[0].T_map_obj.translation().z() -= 0.005;  // 5 mm into the table
   results.final_map.objects[1].T_map_obj.translation().z() += 0.003;  // 3 mm above it
+  // A false box 0.74 m below, on the floor: under the table, not into it (issue 21: B-SLAM's
+  // stray estimates read as interpenetrations of up to 1.77 m).
+  ObjectEstimate stray = results.final_map.objects[0];
+  stray.id = 77;
+  stray.T_map_obj.translation().z() -= 0.74;
+  results.final_map.objects.push_back(stray);
   const RunEvaluation ev = evaluate();
   ASSERT_EQ(ev.penetration_m.size(), 1u);  // the floating brick touches nothing
   EXPECT_NEAR(ev.penetration_m[0], 0.005, 1e-6);
+  results.final_map.objects.pop_back();
   ASSERT_EQ(ev.gap_m.size(), 2u);
   EXPECT_NEAR(ev.gap_m[0], 0.0, 1e-6);
   EXPECT_NEAR(ev.gap_m[1], 0.003, 1e-6);
