@@ -206,18 +206,12 @@ std::vector<FeatureContact> groundTruthContacts(const ClutterScene& scene,
       box.expand(fcl::Vector3d::Constant(config.touch_distance_m));
       if (!box.overlap(fcl_scene.at(j)->getAABB())) continue;
       if (fclDistance(fcl_scene.at(i), fcl_scene.at(j)) > config.touch_distance_m) continue;
-      for (FeatureContact c :
-           findContacts(posed, i + 1, j + 1, -Eigen::Vector3d::UnitZ(), contact_config)) {
-        c.object_a -= 1;  // back to scene indices, table = -1
-        c.object_b -= 1;
-        out.push_back(c);
-      }
+      const auto c = findContacts(posed, i + 1, j + 1, -Eigen::Vector3d::UnitZ(), contact_config);
+      out.insert(out.end(), c.begin(), c.end());
     }
   }
-  std::vector<FeatureContact> indexed = out;  // markLeaning indexes `posed`: the table is 0
-  for (FeatureContact& c : indexed) c.object_a += 1, c.object_b += 1;
-  markLeaning(posed, &indexed);
-  for (std::size_t k = 0; k < out.size(); ++k) out[k].kind = indexed[k].kind;
+  markLeaning(posed, &out);  // on `posed` indices (the table is 0), then back to the scene's
+  for (FeatureContact& c : out) c.object_a -= 1, c.object_b -= 1;
   return out;
 }
 
