@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <map>
 #include <sstream>
 
@@ -184,6 +185,24 @@ bool BackgroundMap::writeBinary(const std::string& path, std::string* error) con
         return copy.writeBinary(tmp);
       },
       error);
+}
+
+bool BackgroundMap::readBinary(const std::string& path, std::string* error) {
+  octomap::OcTree loaded(config_.resolution_m);
+  std::ifstream file(path, std::ios::binary);
+  if (!file || !loaded.readBinary(file)) {
+    if (error) *error = "cannot read the OctoMap " + path;
+    return false;
+  }
+  if (std::abs(loaded.getResolution() - config_.resolution_m) > 1e-9) {
+    if (error)
+      *error = path + " has voxels of " + std::to_string(loaded.getResolution()) +
+               " m, the background is configured for " + std::to_string(config_.resolution_m) +
+               " m (background.resolution_m)";
+    return false;
+  }
+  impl_->tree.swapContent(loaded);
+  return true;
 }
 
 std::string BackgroundMap::binaryData() const {

@@ -153,6 +153,18 @@ class Table {
     real("input.unit_quaternion_tolerance", 1e-9, 0.5,
          "| |q| - 1 | above this: not a unit quaternion",
          [](GeoFusionConfig& c) { return &c.checks.unit_quaternion_tolerance; });
+    integer("input.max_detections_per_frame", 1, 100000,
+            "a frame's usable detections beyond this many are dropped, lowest scores first",
+            [](GeoFusionConfig& c) { return &c.checks.max_detections; });
+    real("input.max_odometry_gap_s", 0.01, 3600,
+         "odometry samples around a frame further apart: the frame is dropped, not guessed, s",
+         [](GeoFusionConfig& c) { return &c.ingestion.max_odometry_gap_s; });
+    real("input.max_frame_age_s", 0.01, 3600,
+         "a frame older than the newest input by more than this is dropped as stale, s",
+         [](GeoFusionConfig& c) { return &c.ingestion.max_frame_age_s; });
+    real("input.keyframe_budget_ms", 1, 1e6,
+         "a keyframe taking longer is an overrun: counted, diagnostics WARN, ms",
+         [](GeoFusionConfig& c) { return &c.ingestion.keyframe_budget_ms; });
   }
   void keyframes() {
     integer("keyframes.every_n_frames", 1, 1000, "a keyframe every N synchronised frames",

@@ -2,7 +2,9 @@
 
 #include "geofusion/common/pose_validation.h"
 
+#include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <sstream>
 
 namespace geofusion {
@@ -17,6 +19,8 @@ const char* toString(SkipReason reason) {
     case SkipReason::kBadScore: return "score not in [0, 1]";
     case SkipReason::kLowScore: return "score below min_score";
     case SkipReason::kOutOfRange: return "beyond max_range_m";
+    case SkipReason::kUnknownClass: return "unknown class";
+    case SkipReason::kOverCap: return "over max_detections";
     case SkipReason::kCount: break;
   }
   return "unknown";
@@ -73,6 +77,10 @@ bool FrameByFrame::check(const RawDetection& raw, ObjectMeasurement* out,
     *reason = SkipReason::kEmptyClass;
     return false;
   }
+  if (!known_classes_.empty() && known_classes_.count(raw.class_name) == 0) {
+    *reason = SkipReason::kUnknownClass;
+    return false;
+  }
   if (!std::isfinite(raw.score) || raw.score < 0.0 || raw.score > 1.0) {
     *reason = SkipReason::kBadScore;
     return false;
@@ -108,8 +116,26 @@ std::vector<WorldDetection> FrameByFrame::process(const std::vector<RawDetection
     }
     wd.T_world_obj = T_world_cam * wd.measurement.T_cam_obj;
     result.push_back(std::move(wd));
-    if (tally) ++tally->accepted;
   }
+  const std::size_t cap = static_cast<std::size_t>(std::max(0, config_.max_detections));
+  if (result.size() > cap) {
+    // The highest scores stay, in their original order.
+    std::vector<std::size_t> order(result.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+      return result[a].measurement.score > result[b].measurement.score;
+    });
+    std::vector<bool> keep(result.size(), false);
+    for (std::size_t i = 0; i < cap; ++i) keep[order[i]] = true;
+    std::vector<WorldDetection> kept;
+    kept.reserve(cap);
+    for (std::size_t i = 0; i < result.size(); ++i)
+      if (keep[i]) kept.push_back(std::move(result[i]));
+    if (tally)
+      tally->skipped[static_cast<std::size_t>(SkipReason::kOverCap)] += result.size() - cap;
+    result = std::move(kept);
+  }
+  if (tally) tally->accepted += result.size();
   return result;
 }
 

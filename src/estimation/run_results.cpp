@@ -165,6 +165,13 @@ bool writeRunResults(const std::string& path, const RunResults& r, std::string* 
       << (r.recording_duration_s > 0 ? r.wall_time_s / r.recording_duration_s : 0.0);
   out << YAML::Key << "frames_seen" << YAML::Value << r.frames_seen;
   out << YAML::Key << "frames_skipped" << YAML::Value << r.frames_skipped;
+  for (const auto& [key, counts] : {std::pair{"frames_dropped", &r.frames_dropped},
+                                    std::pair{"detections_dropped", &r.detections_dropped}}) {
+    out << YAML::Key << key << YAML::Value << YAML::BeginMap;
+    for (const auto& [reason, n] : *counts) out << YAML::Key << reason << YAML::Value << n;
+    out << YAML::EndMap;
+  }
+  out << YAML::Key << "keyframes_over_budget" << YAML::Value << r.keyframes_over_budget;
   out << YAML::Key << "keyframes" << YAML::Value << YAML::BeginSeq;
   for (const KeyframeResult& k : r.keyframes) {
     out << YAML::BeginMap;
@@ -207,7 +214,18 @@ bool writeRunResults(const std::string& path, const RunResults& r, std::string* 
     yaml_io::emitPose(out, "map_camera", r.trajectory[i]);
     out << YAML::EndMap;
   }
-  out << YAML::EndSeq << YAML::EndMap;
+  out << YAML::EndSeq;
+  if (!r.map_id.empty()) {
+    out << YAML::Key << "map" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "id" << YAML::Value << r.map_id;
+    yaml_io::emitPose(out, "map_odom", r.T_map_odom);
+    out << YAML::Key << "background" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "file" << YAML::Value << r.background_file;
+    out << YAML::Key << "bytes" << YAML::Value << r.background_bytes;
+    out << YAML::Key << "fnv1a64" << YAML::Value << r.background_checksum;
+    out << YAML::EndMap << YAML::EndMap;
+  }
+  out << YAML::EndMap;
   return yaml_io::writeAtomically(
       path, "# GeoFusion run results (docs/results.md). Poses [x, y, z, qx, qy, qz, qw].\n", out,
       error);
@@ -264,6 +282,13 @@ bool readRunResults(const std::string& path, const ModelSet& models, RunResults*
     r.peak_rss_mb = root["peak_rss_mb"].as<double>(0.0);
     r.frames_seen = root["frames_seen"].as<int>();
     r.frames_skipped = root["frames_skipped"].as<int>();
+    for (const auto& [key, counts] : {std::pair{"frames_dropped", &r.frames_dropped},
+                                      std::pair{"detections_dropped", &r.detections_dropped}}) {
+      if (!root[key]) continue;
+      for (const auto& kv : root[key])
+        counts->emplace_back(kv.first.as<std::string>(), kv.second.as<int>());
+    }
+    r.keyframes_over_budget = root["keyframes_over_budget"].as<int>(0);
     for (const YAML::Node& k : root["keyframes"]) {
       KeyframeResult kr;
       kr.keyframe = k["index"].as<int>();
@@ -308,6 +333,13 @@ bool readRunResults(const std::string& path, const ModelSet& models, RunResults*
     for (const YAML::Node& t : root["trajectory"]) {
       r.trajectory_stamps.push_back(t["stamp"].as<double>());
       r.trajectory.push_back(yaml_io::parsePose(t["map_camera"], "trajectory map_camera"));
+    }
+    if (const YAML::Node m = root["map"]) {
+      r.map_id = m["id"].as<std::string>();
+      r.T_map_odom = yaml_io::parsePose(m["map_odom"], "map map_odom");
+      r.background_file = m["background"]["file"].as<std::string>("");
+      r.background_bytes = m["background"]["bytes"].as<std::uint64_t>(0);
+      r.background_checksum = m["background"]["fnv1a64"].as<std::string>("");
     }
     *results = std::move(r);
     return true;

@@ -123,7 +123,25 @@ void SceneEstimator::setConfig(const EstimatorConfig& config) {
   monitor_.setConfig(config.monitor);
 }
 
+bool SceneEstimator::resume(const std::vector<ObjectEstimate>& objects,
+                            const Eigen::Isometry3d& T_map_odom) {
+  if (!T_map_cam_.empty()) return false;
+  tracks_.clear();
+  for (const ObjectEstimate& o : objects) {
+    if (!o.model || !o.T_map_obj.matrix().allFinite()) continue;
+    Track& tr = startTrack(o.model, o.T_map_obj, -1);
+    tr.id = o.id;
+    tr.confirmed = true;
+    tr.best_consistency = o.best_consistency;
+    tr.prior_measurements = std::max(0, o.measurements);
+    next_id_ = std::max(next_id_, o.id + 1);
+  }
+  T_map_odom_start_ = T_map_odom;
+  return true;
+}
+
 void SceneEstimator::reset() {
+  T_map_odom_start_ = Eigen::Isometry3d::Identity();
   tracks_.clear();
   T_map_cam_.clear();
   T_odom_cam_.clear();
@@ -151,7 +169,7 @@ ObjectEstimate SceneEstimator::estimateOf(const Track& track) const {
   e.id = track.id;
   e.model = track.model;
   e.T_map_obj = reportedPose(track);
-  e.measurements = static_cast<int>(track.observations.size());
+  e.measurements = track.measurementCount();
   e.best_consistency = track.best_consistency;
   e.false_positive = falsePositiveScore(track.best_consistency, e.measurements);
   e.existence = 1.0 - e.false_positive;
@@ -230,7 +248,7 @@ KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
 // The camera pose of a new keyframe: chained from the previous estimate by the odometry increment.
 Eigen::Isometry3d SceneEstimator::appendCameraPose(const Keyframe& kf) {
   const Eigen::Isometry3d T_map_cam =
-      T_map_cam_.empty() ? kf.T_odom_cam
+      T_map_cam_.empty() ? T_map_odom_start_ * kf.T_odom_cam
                          : T_map_cam_.back() * (T_odom_cam_.back().inverse() * kf.T_odom_cam);
   T_map_cam_.push_back(T_map_cam);
   T_odom_cam_.push_back(kf.T_odom_cam);
@@ -418,8 +436,7 @@ void SceneEstimator::removeFalsePositives(const std::vector<int>& touched, int k
   std::vector<Track> kept;
   for (Track& tr : tracks_) {
     if (std::find(touched.begin(), touched.end(), tr.id) != touched.end()) {
-      const double f =
-          falsePositiveScore(tr.best_consistency, static_cast<int>(tr.observations.size()));
+      const double f = falsePositiveScore(tr.best_consistency, tr.measurementCount());
       tr.confirmed = f <= config_.association.eps_fp;
     }
     // A candidate above eps_fp is not in the map; unseen for long, it is dropped.
@@ -492,12 +509,10 @@ void SceneEstimator::mergeOverlapping(std::vector<int>* removed) {
         // Two of one class: the one with the higher false-positive score goes into the other (the
         // paper). Two classes (a look-alike reported for a stretch, a persistent phantom beside a
         // real object): the one the depth supported more over all its measurements stays.
-        const bool keep_a =
-            A.model->name == B.model->name
-                ? falsePositiveScore(A.best_consistency, static_cast<int>(A.observations.size())) <=
-                      falsePositiveScore(B.best_consistency,
-                                         static_cast<int>(B.observations.size()))
-                : A.depthEvidence() >= B.depthEvidence();
+        const bool keep_a = A.model->name == B.model->name
+                                ? falsePositiveScore(A.best_consistency, A.measurementCount()) <=
+                                      falsePositiveScore(B.best_consistency, B.measurementCount())
+                                : A.depthEvidence() >= B.depthEvidence();
         const std::size_t keep = keep_a ? a : b, drop = keep_a ? b : a;
         Track &K = tracks_[keep], &D = tracks_[drop];
         if (K.model->name == D.model->name) {

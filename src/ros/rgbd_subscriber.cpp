@@ -1,5 +1,6 @@
 #include "geofusion/ros/rgbd_subscriber.h"
 
+#include <algorithm>
 #include <boost/bind/bind.hpp>
 
 namespace geofusion {
@@ -83,8 +84,7 @@ void RgbdSubscriber::makeSynchronizer() {
   using boost::placeholders::_3;
   using boost::placeholders::_4;
   if (withDetections()) {
-    detection_sync_ = std::make_unique<DetectionSync>(DetectionPolicy(config_.queue_size));
-    detection_sync_->setMaxIntervalDuration(ros::Duration(config_.max_interval_s));
+    detection_sync_ = makeDetectionSync(config_);
     detection_sync_->registerCallback(
         boost::bind(&RgbdSubscriber::onSynchronized, this, _1, _2, _3, _4));
   } else {
@@ -93,6 +93,18 @@ void RgbdSubscriber::makeSynchronizer() {
     rgbd_sync_->registerCallback(boost::bind(&RgbdSubscriber::onSynchronized, this, _1, _2, _3,
                                              geofusion::DetectionArrayConstPtr()));
   }
+}
+
+std::unique_ptr<RgbdSubscriber::DetectionSync> RgbdSubscriber::makeDetectionSync(
+    const Config& config) {
+  auto sync = std::make_unique<DetectionSync>(DetectionPolicy(config.queue_size));
+  sync->setMaxIntervalDuration(ros::Duration(config.max_interval_s));
+  return sync;
+}
+
+double RgbdSubscriber::newestStamp() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return newest_stamp_s_;
 }
 
 std::vector<std::string> RgbdSubscriber::topics() const {
@@ -127,9 +139,11 @@ void RgbdSubscriber::noteInput(std::size_t index, const ros::Time& stamp) {
         jumped = true;
         from = last_rgb_stamp_;
         monitor_->reset(wallNow());
+        newest_stamp_s_ = 0.0;
       }
       last_rgb_stamp_ = stamp;
     }
+    newest_stamp_s_ = std::max(newest_stamp_s_, stamp.toSec());
     monitor_->onMessage(index, wallNow());
   }
   if (jumped) {

@@ -48,7 +48,7 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   background_publish_every_ = config_.node.background_publish_every;
   method_name_ = toString(config_.estimator.method);
 
-  ModelSet models;
+  ModelSet& models = models_;
   std::vector<std::string> errors;
   if (!loadModelSet(config_.model_set.name, config_.model_set.dir, packageDir(), &models, &errors,
                     config_.model_set.surface_features)) {
@@ -60,7 +60,7 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   for (const auto& e : errors) ROS_WARN_STREAM("geofusion: " << e);
   pipeline_ = std::make_unique<EstimatorPipeline>(
       models, config_.estimator, config_.keyframes, config_.checks,
-      config_.background_enabled ? &config_.background : nullptr);
+      config_.background_enabled ? &config_.background : nullptr, config_.ingestion);
 
   map_pub_ = pnh_.advertise<geofusion::ObjectMap>("object_map", 1, true);
   markers_pub_ = pnh_.advertise<visualization_msgs::MarkerArray>("map_markers", 1, true);
@@ -73,6 +73,7 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   background_octomap_pub_ = pnh_.advertise<octomap_msgs::Octomap>("background_octomap", 1, true);
 #endif
   save_srv_ = pnh_.advertiseService("save_map", &SceneEstimatorNode::onSave, this);
+  load_srv_ = pnh_.advertiseService("load_map", &SceneEstimatorNode::onLoad, this);
   reset_srv_ = pnh_.advertiseService("reset", &SceneEstimatorNode::onReset, this);
 
   reconfigure_ = std::make_unique<dynamic_reconfigure::Server<geofusion::SceneEstimatorConfig>>(
@@ -95,15 +96,30 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   diagnostics_timer_ = pnh_.createWallTimer(
       ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { diagnostics_.force_update(); });
 
+  // Odometry samples on their own queue and thread, so that a frame waiting for its pose never
+  // blocks their arrival.
+  ros::NodeHandle odom_nh(nh_);
+  odom_nh.setCallbackQueue(&odom_queue_);
+  if (odom_topic_.empty()) tf_sub_ = odom_nh.subscribe("/tf", 200, &SceneEstimatorNode::onTf, this);
+  odom_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &odom_queue_);
+  odom_spinner_->start();
   if (!odom_topic_.empty()) {
-    ros::NodeHandle odom_nh(nh_);
-    odom_nh.setCallbackQueue(&odom_queue_);
     odom_sub_ = odom_nh.subscribe(odom_topic_, 200, &SceneEstimatorNode::onOdometry, this);
-    odom_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &odom_queue_);
-    odom_spinner_->start();
     ROS_INFO_STREAM("geofusion: odometry from " << odom_sub_.getTopic()
                                                 << " (nav_msgs/Odometry) instead of TF's "
                                                 << odom_frame_ << " -> base");
+  }
+
+  // ~initial_map: continue a saved map after a restart; one that cannot be loaded stops the
+  // start (a robot must not silently begin from nothing when told to resume).
+  std::string initial_map;
+  pnh_.param<std::string>("initial_map", initial_map, "");
+  if (!initial_map.empty()) {
+    std::string message;
+    int objects = 0;
+    if (!load(initial_map, &message, &objects))
+      throw std::runtime_error("~initial_map: " + message + "; not starting");
+    ROS_INFO_STREAM("geofusion: " << message);
   }
 
   const RgbdSubscriber::Config sub = RgbdSubscriber::configOf(pnh_, config_.input);
@@ -123,6 +139,7 @@ SceneEstimatorNode::~SceneEstimatorNode() {
   subscriber_.reset();
   if (odom_spinner_) odom_spinner_->stop();
   odom_sub_.shutdown();
+  tf_sub_.shutdown();
   if (!save_on_shutdown_.empty()) {
     std::string message;
     std::vector<std::string> files;
@@ -135,46 +152,15 @@ void SceneEstimatorNode::onFrame(const sensor_msgs::ImageConstPtr& /*rgb*/,
                                  const sensor_msgs::ImageConstPtr& depth,
                                  const sensor_msgs::CameraInfoConstPtr& info,
                                  const geofusion::DetectionArrayConstPtr& dets) {
-  Eigen::Isometry3d T_odom_cam;
-  std::string error;
-  bool have_pose = false;
-  if (odom_topic_.empty()) {
-    have_pose = lookupTransformWallTimeout(tf_buffer_, odom_frame_, dets->header.frame_id,
-                                           dets->header.stamp, tf_timeout_s_, &T_odom_cam, &error);
-  } else {
-    // odom -> base from the odometry topic (its own buffer, so a recording's odom -> base on TF
-    // cannot mix in), base -> camera from TF.
-    Eigen::Isometry3d T_odom_base, T_base_cam;
-    const std::string base = odom_base_frame_.get();
-    have_pose = !base.empty() &&
-                lookupTransformWallTimeout(odom_buffer_, odom_frame_, base, dets->header.stamp,
-                                           tf_timeout_s_, &T_odom_base, &error) &&
-                lookupTransformWallTimeout(tf_buffer_, base, dets->header.frame_id,
-                                           dets->header.stamp, tf_timeout_s_, &T_base_cam, &error);
-    if (base.empty()) error = "no odometry received on " + odom_sub_.getTopic() + " yet";
-    T_odom_cam = T_odom_base * T_base_cam;
-  }
-  if (!have_pose) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    ++tf_failures_;
-    ROS_WARN_STREAM_THROTTLE(warn_period_s_, "geofusion: frame skipped, no TF from "
-                                                 << odom_frame_ << " to " << dets->header.frame_id
-                                                 << ": " << error << " (" << tf_failures_
-                                                 << " so far)");
-    return;
-  }
+  const EstimatorPipeline::CameraPose pose = cameraPose(*dets);
   KeyframeResult result;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     ++frames_;
-    const auto outcome = pipeline_->process(*depth, *info, *dets, T_odom_cam, &result);
-    if (outcome == EstimatorPipeline::Outcome::kBadDepth) {
-      ++bad_depth_;
-      ROS_WARN_STREAM_THROTTLE(warn_period_s_,
-                               "geofusion: frame skipped: "
-                                   << (depthProblem(*depth) ? depthProblem(*depth)
-                                                            : "camera_info or depth size mismatch")
-                                   << " (" << bad_depth_ << " so far)");
+    const auto outcome =
+        pipeline_->process(*depth, *info, *dets, pose, subscriber_->newestStamp(), &result);
+    if (outcome == EstimatorPipeline::Outcome::kDropped) {
+      warnDropped(*depth, *dets);
       return;
     }
     if (outcome != EstimatorPipeline::Outcome::kKeyframe) return;
@@ -183,6 +169,20 @@ void SceneEstimatorNode::onFrame(const sensor_msgs::ImageConstPtr& /*rgb*/,
     reportFailedStages(result);
     if (!result.detection_warning.empty())
       ROS_WARN_STREAM_THROTTLE(10.0, "geofusion: " << result.detection_warning);
+    if (pipeline_->lastCapped() > 0)
+      ROS_WARN_STREAM_THROTTLE(
+          warn_period_s_, "geofusion: " << pipeline_->lastCapped()
+                                        << " detections beyond input.max_detections_per_frame ("
+                                        << config_.checks.max_detections
+                                        << ") dropped, the lowest scores first");
+    if (pipeline_->lastKeyframeOverran())
+      ROS_WARN_STREAM_THROTTLE(warn_period_s_,
+                               "geofusion: keyframe "
+                                   << result.keyframe << " took "
+                                   << result.timings.total_ms + pipeline_->lastBackgroundMs()
+                                   << " ms, over input.keyframe_budget_ms ("
+                                   << pipeline_->ingestionConfig().keyframe_budget_ms << "; "
+                                   << pipeline_->budgetOverruns() << " overruns so far)");
   }
   std_msgs::Header header;
   header.stamp = dets->header.stamp;
@@ -190,6 +190,74 @@ void SceneEstimatorNode::onFrame(const sensor_msgs::ImageConstPtr& /*rgb*/,
   publish(result, header);
   ROS_DEBUG_STREAM("geofusion: keyframe " << result.keyframe << ": " << result.objects.size()
                                           << " objects, " << result.timings.total_ms << " ms");
+}
+
+// The camera pose at the detections' stamp: odom -> camera from TF, or odom -> base from the
+// odometry topic and base -> camera from TF.
+EstimatorPipeline::CameraPose SceneEstimatorNode::cameraPose(
+    const geofusion::DetectionArray& dets) {
+  EstimatorPipeline::CameraPose pose;
+  if (odom_topic_.empty()) {
+    pose.found =
+        lookupTransformWallTimeout(tf_buffer_, odom_frame_, dets.header.frame_id, dets.header.stamp,
+                                   tf_timeout_s_, &pose.T_odom_cam, &pose.error);
+    return pose;
+  }
+  // Its own buffer, so a recording's odom -> base on TF cannot mix in.
+  Eigen::Isometry3d T_odom_base, T_base_cam;
+  const std::string base = odom_base_frame_.get();
+  pose.found = !base.empty() &&
+               lookupTransformWallTimeout(odom_buffer_, odom_frame_, base, dets.header.stamp,
+                                          tf_timeout_s_, &T_odom_base, &pose.error) &&
+               lookupTransformWallTimeout(tf_buffer_, base, dets.header.frame_id, dets.header.stamp,
+                                          tf_timeout_s_, &T_base_cam, &pose.error);
+  if (base.empty()) pose.error = "no odometry received on " + odom_sub_.getTopic() + " yet";
+  pose.T_odom_cam = T_odom_base * T_base_cam;
+  return pose;
+}
+
+// A throttled warning per drop reason, with what to check. Under mutex_.
+void SceneEstimatorNode::warnDropped(const sensor_msgs::Image& depth,
+                                     const geofusion::DetectionArray& dets) {
+  const FrameDrop reason = pipeline_->lastDrop();
+  const std::size_t so_far = pipeline_->drops().of(reason);
+  switch (reason) {
+    case FrameDrop::kNoOdometry:
+      ROS_WARN_STREAM_THROTTLE(warn_period_s_, "geofusion: frame skipped, no TF from "
+                                                   << odom_frame_ << " to " << dets.header.frame_id
+                                                   << ": " << pipeline_->lastPoseError() << " ("
+                                                   << so_far << " so far)");
+      break;
+    case FrameDrop::kOdometryGap:
+      ROS_WARN_STREAM_THROTTLE(warn_period_s_,
+                               "geofusion: frame at "
+                                   << dets.header.stamp << " skipped: its odometry samples are "
+                                   << pipeline_->odometry().gapAround(dets.header.stamp.toSec())
+                                   << " s apart, more than input.max_odometry_gap_s ("
+                                   << pipeline_->ingestionConfig().max_odometry_gap_s
+                                   << "); its pose would be a guess (" << so_far << " so far)");
+      break;
+    case FrameDrop::kBadDepth:
+      ROS_WARN_STREAM_THROTTLE(
+          warn_period_s_,
+          "geofusion: frame skipped: "
+              << (depthProblem(depth) ? depthProblem(depth) : "camera_info or depth size mismatch")
+              << " (" << so_far << " so far)");
+      break;
+    default:
+      ROS_WARN_STREAM_THROTTLE(warn_period_s_,
+                               "geofusion: frame at "
+                                   << dets.header.stamp << " skipped: " << toString(reason) << " ("
+                                   << so_far << " so far; input.max_frame_age_s "
+                                   << pipeline_->ingestionConfig().max_frame_age_s << ")");
+  }
+}
+
+// Stamps of odom -> * transforms on /tf: the odometry samples that tell a gap.
+void SceneEstimatorNode::onTf(const tf2_msgs::TFMessageConstPtr& msg) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (const geometry_msgs::TransformStamped& t : msg->transforms)
+    if (t.header.frame_id == odom_frame_) pipeline_->odometry().add(t.header.stamp.toSec());
 }
 
 // A stage whose solve failed (its result not used) is counted for diagnostics and warned about.
@@ -288,9 +356,15 @@ void SceneEstimatorNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
                    "the last keyframe's optimisation failed; its result is not used");
   } else if (!last_.detection_warning.empty()) {
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN, last_.detection_warning);
-  } else if (tf_failures_ + bad_depth_ > frames_ / 2) {
+  } else if (pipeline_->lastKeyframeOverran()) {
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
-                   "most frames skipped (missing TF or unusable depth)");
+                   "the last keyframe took longer than input.keyframe_budget_ms");
+  } else if (pipeline_->lastCapped() > 0) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                   "the last frame had more detections than input.max_detections_per_frame");
+  } else if (pipeline_->drops().total() > frames_ / 2) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                   "most frames dropped: " + pipeline_->drops().summary());
   } else {
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "running");
   }
@@ -318,15 +392,17 @@ void SceneEstimatorNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
       const double rate = dt > 0.0 && counts[i] >= before ? (counts[i] - before) / dt : 0.0;
       status.addf("input rate " + topics[i], "%.1f Hz", rate);
     }
-    const std::size_t most = counts.empty() ? 0 : *std::max_element(counts.begin(), counts.end());
     status.add("synchronised by the subscriber", synced);
-    status.add("sync drops", most > synced ? most - synced : 0);
+    pipeline_->setUnsynchronised(unsynchronisedFrames(counts, synced));
     last_counts_ = counts;
     last_rates_time_ = now;
   }
   status.add("keyframes", keyframes_);
-  status.add("frames without TF", tf_failures_);
-  status.add("frames with unusable depth", bad_depth_);
+  status.add("frames dropped", pipeline_->drops().summary());
+  for (std::size_t i = 1; i < static_cast<std::size_t>(FrameDrop::kCount); ++i)
+    status.add("frames dropped: " + std::string(toString(static_cast<FrameDrop>(i))),
+               pipeline_->drops().count[i]);
+  status.add("keyframes over the time budget", pipeline_->budgetOverruns());
   status.add("detections", pipeline_->tally().summary());
   status.add("objects", last_.objects.size());
   status.add("contacts", last_.contacts.size());
@@ -399,6 +475,8 @@ void SceneEstimatorNode::onOdometry(const nav_msgs::OdometryConstPtr& msg) {
   t.transform.rotation.x = u.x(), t.transform.rotation.y = u.y();
   t.transform.rotation.z = u.z(), t.transform.rotation.w = u.w();
   odom_buffer_.setTransform(t, "odometry " + odom_sub_.getTopic());
+  std::lock_guard<std::mutex> lock(mutex_);
+  pipeline_->odometry().add(msg->header.stamp.toSec());
 }
 
 void SceneEstimatorNode::onTimeJump(const ros::Time& from, const ros::Time& to) {
@@ -414,37 +492,58 @@ void SceneEstimatorNode::onTimeJump(const ros::Time& from, const ros::Time& to) 
 
 bool SceneEstimatorNode::save(const std::string& prefix, std::string* message,
                               std::vector<std::string>* files) {
-  RunResults results;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    results.method = method_name_;
-    results.source = "scene_estimator_node";
-    results.config_yaml = configYaml(config_);
-    results.final_map = pipeline_->estimator().numKeyframes() > 0 ? pipeline_->estimator().finish()
-                                                                  : KeyframeResult();
-    results.trajectory = pipeline_->estimator().trajectory();
-    results.trajectory_stamps = pipeline_->estimator().keyframeStamps();
-    results.support_plane = pipeline_->estimator().supportPlane();
-  }
-  const std::string path = prefix + ".yaml";
+  std::lock_guard<std::mutex> lock(mutex_);
+  RunResults map = pipeline_->currentMap();
+  map.method = method_name_;
+  map.source = "scene_estimator_node";
+  map.model_set = config_.model_set.name;
+  map.config_yaml = configYaml(config_);
+  const std::size_t objects = map.final_map.objects.size(),
+                    contacts = map.final_map.contacts.size();
+  MapFiles written;
   std::string error;
-  if (!writeRunResults(path, results, &error)) {
-    *message = "map not saved: " + error;
+  if (!pipeline_->saveMap(prefix, std::move(map), &written, &error)) {
+    *message = "map not saved: " + error + " (the previous map under " + prefix +
+               ", if any, is untouched)";
     return false;
   }
-  files->push_back(path);
+  files->push_back(written.yaml);
+  if (!written.background.empty()) files->push_back(written.background);
+  *message = "map saved to " + written.yaml + " (" + std::to_string(objects) + " objects, " +
+             std::to_string(contacts) + " contacts" +
+             (written.background.empty() ? "" : ", background " + written.background) + ")";
+  return true;
+}
+
+bool SceneEstimatorNode::load(const std::string& path, std::string* message, int* objects) {
+  RunResults loaded;
+  std::string error;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (pipeline_->background()) {
-      if (!pipeline_->background()->writeBinary(prefix + ".bt", &error)) {
-        *message = "objects saved to " + path + " but the background not: " + error;
-        return false;
-      }
-      files->push_back(prefix + ".bt");
+    if (!pipeline_->loadMap(path, models_, &loaded, &error)) {
+      *message = "map not loaded: " + error;
+      return false;
     }
+    last_ = loaded.final_map;
   }
-  *message = "map saved to " + path + " (" + std::to_string(results.final_map.objects.size()) +
-             " objects, " + std::to_string(results.final_map.contacts.size()) + " contacts)";
+  *objects = static_cast<int>(loaded.final_map.objects.size());
+  *message = "map loaded from " + path + " (" + std::to_string(*objects) + " objects, " +
+             std::to_string(loaded.final_map.contacts.size()) + " contacts, map id " +
+             loaded.map_id + ")";
+  std_msgs::Header header;
+  header.stamp = ros::Time::now();
+  header.frame_id = map_frame_;
+  publish(loaded.final_map, header);
+  return true;
+}
+
+bool SceneEstimatorNode::onLoad(geofusion::LoadMap::Request& req,
+                                geofusion::LoadMap::Response& res) {
+  res.success = load(req.path, &res.message, &res.objects);
+  if (res.success)
+    ROS_INFO_STREAM("geofusion: " << res.message);
+  else
+    ROS_WARN_STREAM("geofusion: " << res.message);
   return true;
 }
 

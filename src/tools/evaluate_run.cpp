@@ -79,6 +79,8 @@ int main(int argc, char** argv) {
     std::cerr << "evaluate_run: " << error << "\n";
     return 1;
   }
-  if (!opt.quiet) std::cout << summarize(evaluation);
+  if (!opt.quiet) std::cout << summarize(evaluation);  // warnings included
+  for (const std::string& w : evaluation.warnings)
+    if (opt.quiet) std::cerr << "evaluate_run: warning: " << opt.results << ": " << w << "\n";
   return 0;
 }

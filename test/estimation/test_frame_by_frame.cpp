@@ -123,5 +123,42 @@ TEST(DetectionTally, AddsUp) {
   EXPECT_EQ(a.totalSkipped(), 3u);
 }
 
+// A detector gone wild (thousands of detections in a frame): the highest scores are kept up to
+// the cap, in their order, and the rest counted; unknown classes are counted, not used.
+TEST(FrameByFrame, CapsDetectionsByScoreAndCountsUnknownClasses) {
+  FrameByFrame::Config cfg;
+  cfg.max_detections = 3;
+  FrameByFrame fbf(cfg);
+  fbf.setKnownClasses({"003_cracker_box"});
+  std::vector<RawDetection> in;
+  for (double score : {0.2, 0.9, 0.5, 0.7, 0.1, 0.95}) {
+    RawDetection d = good();
+    d.score = score;
+    in.push_back(d);
+  }
+  in.push_back(good("999_not_a_model"));
+  DetectionTally tally;
+  const auto out = fbf.process(in, Eigen::Isometry3d::Identity(), &tally);
+  ASSERT_EQ(out.size(), 3u);
+  EXPECT_DOUBLE_EQ(out[0].measurement.score, 0.9);
+  EXPECT_DOUBLE_EQ(out[1].measurement.score, 0.7);
+  EXPECT_DOUBLE_EQ(out[2].measurement.score, 0.95);
+  EXPECT_EQ(tally.accepted, 3u);
+  EXPECT_EQ(tally.skipped[static_cast<std::size_t>(SkipReason::kOverCap)], 3u);
+  EXPECT_EQ(tally.skipped[static_cast<std::size_t>(SkipReason::kUnknownClass)], 1u);
+  EXPECT_NE(tally.summary().find("1 unknown class"), std::string::npos) << tally.summary();
+  EXPECT_NE(tally.summary().find("3 over max_detections"), std::string::npos) << tally.summary();
+  // 5000 detections in one frame: still the cap, quickly.
+  std::vector<RawDetection> flood(5000, good());
+  for (std::size_t i = 0; i < flood.size(); ++i) flood[i].score = 0.5 + 0.4 * (i % 100) / 100.0;
+  cfg.max_detections = 100;
+  fbf.setConfig(cfg);
+  DetectionTally flood_tally;
+  const auto kept = fbf.process(flood, Eigen::Isometry3d::Identity(), &flood_tally);
+  ASSERT_EQ(kept.size(), 100u);
+  for (const WorldDetection& d : kept) EXPECT_GE(d.measurement.score, 0.5 + 0.4 * 98 / 100.0);
+  EXPECT_EQ(flood_tally.skipped[static_cast<std::size_t>(SkipReason::kOverCap)], 4900u);
+}
+
 }  // namespace
 }  // namespace geofusion

@@ -322,5 +322,50 @@ TEST(SceneEstimator, BadInputIsSkippedNotFatal) {
   for (const auto& o : r2.objects) EXPECT_TRUE(o.T_map_obj.matrix().allFinite());
 }
 
+// A restart in the middle of a run: the map of the first half, resumed, goes on with the second
+// half as if never interrupted: the same objects under the same ids, none doubled, and the
+// objects seen only before the restart kept.
+TEST(SceneEstimator, AResumedMapContinuesWithTheSameObjects) {
+  const Sequence& s = demoSequence();
+  const std::size_t half = s.frames.size() / 2;
+  EstimatorConfig config;
+  config.method = Method::kGeoFusion;
+  SceneEstimator before(s.models, config);
+  for (std::size_t k = 0; k < half; ++k) before.addKeyframe(keyframeOf(s, k));
+  const KeyframeResult saved = before.finish();
+  const Eigen::Isometry3d T_map_odom = before.T_map_odom();
+  ASSERT_GT(saved.objects.size(), 3u);
+
+  SceneEstimator after(s.models, config);
+  ASSERT_TRUE(after.resume(saved.objects, T_map_odom));
+  for (std::size_t k = half; k < s.frames.size(); ++k) after.addKeyframe(keyframeOf(s, k));
+  EXPECT_FALSE(after.resume(saved.objects, T_map_odom)) << "resume after keyframes";
+  const KeyframeResult resumed = after.finish();
+
+  SceneEstimator fresh(s.models, config);  // the second half alone, for comparison
+  for (std::size_t k = half; k < s.frames.size(); ++k) fresh.addKeyframe(keyframeOf(s, k));
+  const Score fresh_score = scoreMap(s.scene, fresh.finish().objects);
+  const Score saved_score = scoreMap(s.scene, saved.objects);
+  const Score resumed_score = scoreMap(s.scene, resumed.objects);
+  std::printf("saved %d true / %d false; resumed %d / %d; second half alone %d / %d\n",
+              saved_score.true_positives, saved_score.false_positives, resumed_score.true_positives,
+              resumed_score.false_positives, fresh_score.true_positives,
+              fresh_score.false_positives);
+  EXPECT_GE(resumed_score.true_positives,
+            std::max(saved_score.true_positives, fresh_score.true_positives));
+  EXPECT_LE(resumed_score.false_positives, saved_score.false_positives + 1);
+  // The saved objects that are true keep their ids.
+  int kept = 0, true_saved = 0;
+  for (std::size_t i = 0; i < saved.objects.size(); ++i) {
+    if (saved_score.match[i] < 0) continue;
+    ++true_saved;
+    for (const ObjectEstimate& o : resumed.objects) kept += o.id == saved.objects[i].id;
+  }
+  EXPECT_GE(kept, true_saved - 1);
+  // The first camera after the restart continues the trajectory through map -> odom.
+  const Eigen::Isometry3d expected = T_map_odom * keyframeOf(s, half).T_odom_cam;
+  EXPECT_LT((after.trajectory().front().translation() - expected.translation()).norm(), 0.02);
+}
+
 }  // namespace
 }  // namespace geofusion

@@ -506,5 +506,34 @@ TEST_F(RunEvaluationTest, ResultsAndEvaluationFilesRoundTrip) {
     EXPECT_NE(text.str().find(key), std::string::npos) << key;
 }
 
+// A ground truth without contacts makes the contact figures meaningless: said, not silent.
+TEST_F(RunEvaluationTest, AGroundTruthWithoutContactsIsWarnedAbout) {
+  EXPECT_TRUE(evaluate().warnings.empty());
+  gt.scene.contacts.clear();
+  const RunEvaluation ev = evaluate();
+  ASSERT_EQ(ev.warnings.size(), 1u);
+  EXPECT_NE(ev.warnings[0].find("no support contact"), std::string::npos);
+  EXPECT_NE(summarize(ev).find("warning: the ground truth has no support contact"),
+            std::string::npos);
+  // A method that infers no contacts has nothing to be wrong about.
+  results.method = "B-SLAM";
+  EXPECT_TRUE(evaluate().warnings.empty());
+}
+
+// A method that solves only every N-th keyframe: the mean carries the solves the median misses,
+// and the final solve is reported on its own.
+TEST_F(RunEvaluationTest, TheKeyframeTimeMeanCarriesSolvesMadeEveryNthKeyframe) {
+  results.method = "B-SLAM";
+  results.keyframes[0].timings.total_ms = 0.05;
+  results.keyframes[1].timings.total_ms = 0.05;
+  results.keyframes[2].timings.total_ms = 30.0;  // the stage I solve
+  results.final_map.timings.total_ms = 45.0;
+  const RunEvaluation ev = evaluate();
+  EXPECT_DOUBLE_EQ(ev.final_solve.total_ms, 45.0);
+  const std::string summary = summarize(ev);
+  EXPECT_NE(summary.find("10.0 ms mean, 0.1 ms median"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("final solve 45.0 ms"), std::string::npos) << summary;
+}
+
 }  // namespace
 }  // namespace geofusion

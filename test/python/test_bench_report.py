@@ -260,8 +260,9 @@ class OtherMetricsTest(unittest.TestCase):
         self.assertAlmostEqual(m['penetration_max_mm'], 2.0)
         self.assertAlmostEqual(m['float_gap_mean_mm'], 1.0)
         self.assertAlmostEqual(m['float_gap_max_mm'], 1.5)
-        # totals 10, 20 and 10, 20, 30, 40: median 20, max 40
+        # totals 10, 20 and 10, 20, 30, 40: median 20, mean 130 / 6, max 40
         self.assertAlmostEqual(m['ms_per_keyframe_p50'], 20.0)
+        self.assertAlmostEqual(m['ms_per_keyframe_mean'], 130.0 / 6)
         self.assertAlmostEqual(m['ms_per_keyframe_max'], 40.0)
         self.assertAlmostEqual(m['ms_stage_one_p95'], 3.0)
         self.assertAlmostEqual(m['realtime_factor'], 0.1)

@@ -16,7 +16,7 @@ import tf2_ros
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from dynamic_reconfigure.client import Client
 from geofusion.msg import ObjectMap
-from geofusion.srv import SaveMap
+from geofusion.srv import LoadMap, SaveMap
 from std_srvs.srv import Trigger
 from sensor_msgs import point_cloud2
 from sensor_msgs.msg import PointCloud2
@@ -136,7 +136,7 @@ class EstimatorReplayTest(unittest.TestCase):
         self.assertIn('last keyframe ms: stage II', values)
         self.assertIn('input rate ' + util.DETECTIONS_TOPIC, values)
         self.assertTrue(values['input rate ' + util.DETECTIONS_TOPIC].endswith(' Hz'))
-        self.assertGreaterEqual(int(values['sync drops']), 0)
+        self.assertGreaterEqual(int(values['frames dropped: unsynchronised']), 0)
         rates = [float(d_values['input rate ' + util.DETECTIONS_TOPIC].split()[0]) for d_values in
                  ({kv.key: kv.value for kv in d.values} for d in mine)
                  if 'input rate ' + util.DETECTIONS_TOPIC in d_values]
@@ -146,11 +146,35 @@ class EstimatorReplayTest(unittest.TestCase):
         prefix = os.path.join(self.dir, 'saved')
         res = rospy.ServiceProxy(NS + '/save_map', SaveMap)(prefix)
         self.assertTrue(res.success, res.message)
-        self.assertEqual(list(res.files), [prefix + '.yaml', prefix + '.bt'])
-        with open(prefix + '.bt', 'rb') as f:
-            self.assertTrue(f.readline().startswith(b'# Octomap OcTree binary file'))
+        # One unit: the YAML names its background, <prefix>.<map id>.bt.
+        self.assertEqual(len(res.files), 2, res.files)
+        self.assertEqual(res.files[0], prefix + '.yaml')
         saved = util.load_yaml(prefix + '.yaml')
+        background = res.files[1]
+        self.assertEqual(background, '%s.%s.bt' % (prefix, saved['map']['id']))
+        with open(background, 'rb') as f:
+            self.assertTrue(f.readline().startswith(b'# Octomap OcTree binary file'))
         self.assertEqual(len(saved['final_map']['objects']), len(final.objects))
+        res = rospy.ServiceProxy(NS + '/reset', Trigger)()
+        self.assertTrue(res.success)
+        time.sleep(0.5)
+        with self.lock:
+            self.assertEqual(len(self.maps[-1].objects), 0)
+        # load_map brings the saved map back (the same objects, ids and poses) ...
+        load = rospy.ServiceProxy(NS + '/load_map', LoadMap)
+        res = load(prefix)
+        self.assertTrue(res.success, res.message)
+        self.assertEqual(res.objects, len(final.objects))
+        time.sleep(0.5)
+        with self.lock:
+            loaded = self.maps[-1]
+        self.assertEqual(sorted(o.id for o in loaded.objects), sorted(o.id for o in final.objects))
+        # ... and refuses pieces that do not belong together, keeping the map it has.
+        with open(background, 'ab') as f:
+            f.write(b'x')
+        res = load(prefix)
+        self.assertFalse(res.success)
+        self.assertIn('do not belong together', res.message)
         res = rospy.ServiceProxy(NS + '/reset', Trigger)()
         self.assertTrue(res.success)
         time.sleep(0.5)

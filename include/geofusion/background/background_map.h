@@ -46,6 +46,9 @@ class BackgroundMap {
   std::size_t numLeaves() const;
   /// Writes the tree as an OctoMap binary file (.bt), through a temporary file and a rename.
   bool writeBinary(const std::string& path, std::string* error) const;
+  /// Replaces the tree with an OctoMap binary file's (.bt of writeBinary). Fails, leaving the
+  /// tree as it was, when the file cannot be read or its resolution is not config().resolution_m.
+  bool readBinary(const std::string& path, std::string* error);
   /// The tree's binary (free/occupied) serialisation without the file header, as
   /// octomap::OcTree::writeBinaryData writes it: what an octomap_msgs/Octomap carries in `data`
   /// (with binary = true and id = "OcTree").

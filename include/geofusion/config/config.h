@@ -8,6 +8,7 @@
 #pragma once
 
 #include "geofusion/background/background_map.h"
+#include "geofusion/common/ingestion.h"
 #include "geofusion/estimation/frame_by_frame.h"
 #include "geofusion/estimation/keyframe_selector.h"
 #include "geofusion/estimation/scene_estimator.h"
@@ -53,6 +54,7 @@ struct GeoFusionConfig {
   std::string method = "geofusion";
   ModelSetConfig model_set;
   InputConfig input;
+  IngestionConfig ingestion;
   FrameByFrame::Config checks;
   KeyframeSelectorConfig keyframes;
   EstimatorConfig estimator;

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstddef>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,8 @@ enum class SkipReason {
   kBadScore,
   kLowScore,
   kOutOfRange,
+  kUnknownClass,  ///< a class the model set does not have
+  kOverCap,       ///< beyond max_detections of the frame (the lowest scores go first)
   kCount
 };
 
@@ -54,6 +57,9 @@ class FrameByFrame {
     double max_range_m = 10.0;
     /// Tolerance on | |q| - 1 | of incoming quaternions.
     double unit_quaternion_tolerance = kUnitQuaternionTolerance;
+    /// A frame's usable detections beyond this many are dropped, the lowest scores first
+    /// (kOverCap): a detector gone wild cannot stall the estimator.
+    int max_detections = 100;
   };
 
   FrameByFrame() = default;
@@ -62,17 +68,23 @@ class FrameByFrame {
   const Config& config() const { return config_; }
   void setConfig(const Config& config) { config_ = config; }
 
+  /// The classes the estimator knows (its model set); a detection of another class is skipped
+  /// (kUnknownClass). Empty (the default): every class passes.
+  void setKnownClasses(std::set<std::string> classes) { known_classes_ = std::move(classes); }
+
   /// Checks one raw detection; on success fills `out` and returns true, else sets `reason`.
   bool check(const RawDetection& raw, ObjectMeasurement* out, SkipReason* reason) const;
 
-  /// Checks all detections of a frame and places the usable ones in the world frame through the
-  /// camera pose T_world_cam. Adds one frame and the per-detection outcomes to `tally`.
+  /// Checks all detections of a frame, keeps at most max_detections of the usable ones (the
+  /// highest scores) and places them in the world frame through the camera pose T_world_cam.
+  /// Adds one frame and the per-detection outcomes to `tally`.
   std::vector<WorldDetection> process(const std::vector<RawDetection>& detections,
                                       const Eigen::Isometry3d& T_world_cam,
                                       DetectionTally* tally) const;
 
  private:
   Config config_;
+  std::set<std::string> known_classes_;
 };
 
 }  // namespace geofusion

@@ -6,6 +6,7 @@
 
 #include "geofusion/estimation/scene_estimator.h"
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -21,12 +22,21 @@ struct RunResults {
   double wall_time_s = 0.0;  ///< processing time of the whole run
   double peak_rss_mb = 0.0;  ///< the process's peak resident memory at the end (0: unknown)
   int frames_seen = 0;       ///< synchronised RGB-D + detection sets
-  int frames_skipped = 0;    ///< ... of which unusable (no TF, bad depth)
+  int frames_skipped = 0;    ///< ... of which dropped (the sum of frames_dropped)
+  /// Inputs not used, by reason (FrameDrop's and SkipReason's words): frames and detections.
+  std::vector<std::pair<std::string, int>> frames_dropped, detections_dropped;
+  int keyframes_over_budget = 0;  ///< keyframes longer than input.keyframe_budget_ms
   std::vector<KeyframeResult> keyframes;
   KeyframeResult final_map;    ///< after SceneEstimator::finish()
   SupportPlane support_plane;  ///< the estimator's table plane (map frame), when it found one
   std::vector<double> trajectory_stamps;
   std::vector<Eigen::Isometry3d> trajectory;  ///< final estimate of T_map_cam per keyframe
+  /// A saved map (map_store.h): its id, the background file it belongs to (name beside the YAML,
+  /// size, FNV-1a 64 checksum in hex; empty: none) and the last map -> odom correction.
+  std::string map_id;
+  std::string background_file, background_checksum;
+  std::uint64_t background_bytes = 0;
+  Eigen::Isometry3d T_map_odom = Eigen::Isometry3d::Identity();
 };
 
 /// Optimisation stages (keyframes and the final map) whose solve failed, their result not used.

@@ -184,6 +184,14 @@ class SceneEstimator {
   ~SceneEstimator();
 
   KeyframeResult addKeyframe(const Keyframe& keyframe);
+  /// Continues a saved map (map_store.h) before the first keyframe: its objects become
+  /// confirmed objects at their saved poses with their measurement counts and consistency (new
+  /// detections associate with them; the free-space test removes those gone), and the first
+  /// keyframe's camera is placed through the saved map -> odom (the robot's odometry must
+  /// continue in the same odom frame). The support plane is found again from the first keyframe
+  /// (a saved one has its normal and height only). False, changing nothing, once a keyframe was
+  /// added.
+  bool resume(const std::vector<ObjectEstimate>& objects, const Eigen::Isometry3d& T_map_odom);
   /// Final stage I and stage II over everything (the map a run ends with).
   KeyframeResult finish();
   void reset();
@@ -218,6 +226,11 @@ class SceneEstimator {
     bool confirmed = false;        ///< false-positive score at most eps_fp: part of the map
     double variance = 1.0;         ///< stage I measurement variance factor (noise adaptation)
     int free_space_keyframes = 0;  ///< keyframes in a row showing free space where it should be
+    int prior_measurements = 0;    ///< measurements made before a resume (saved with the map)
+    /// n_j: its measurements, those before a resume included.
+    int measurementCount() const {
+      return static_cast<int>(observations.size()) + prior_measurements;
+    }
     Eigen::Vector3d box_centre = Eigen::Vector3d::Zero();  ///< model-frame bounding box
     Eigen::Vector3d box_half = Eigen::Vector3d::Zero();
     /// How much the depth supported it over all its measurements: the sum of their f_gc.
@@ -280,6 +293,7 @@ class SceneEstimator {
   std::vector<Eigen::Isometry3d> T_map_cam_, T_odom_cam_;
   double odometry_variance_ = 1.0;  ///< stage I odometry variance factor (noise adaptation)
   std::vector<double> stamps_;
+  Eigen::Isometry3d T_map_odom_start_ = Eigen::Isometry3d::Identity();  ///< resume()
   SupportPlane support_;
   std::shared_ptr<ObjectModel> support_model_;
   Eigen::Isometry3d T_map_support_ = Eigen::Isometry3d::Identity();

@@ -169,6 +169,10 @@ struct RunEvaluation {
   std::vector<ObjectLifecycle> lifecycle;
 
   std::vector<StageTimings> timings;  ///< per keyframe
+  StageTimings final_solve;           ///< the solve that made the final map (RunResults::finish)
+  /// What makes a figure of this evaluation meaningless or suspect, one sentence each (no contacts
+  /// in the ground truth, ...). evaluate_run prints them; the JSON has them as "warnings".
+  std::vector<std::string> warnings;
   double recording_duration_s = 0.0, wall_time_s = 0.0, peak_rss_mb = 0.0;
 };
 

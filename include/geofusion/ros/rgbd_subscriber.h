@@ -66,14 +66,22 @@ class RgbdSubscriber {
   /// Messages received on each input (order of topics()) since the last reset or time jump.
   std::vector<std::size_t> messageCounts() const;
 
+  /// The synchroniser of RGB, depth, camera_info and detections (approximate time, the queue and
+  /// stamp spread of `config`): the node's, and run_offline's over a bag, so that both make the
+  /// same sets of the same messages.
+  using DetectionPolicy = message_filters::sync_policies::ApproximateTime<
+      sensor_msgs::Image, sensor_msgs::Image, sensor_msgs::CameraInfo, geofusion::DetectionArray>;
+  using DetectionSync = message_filters::Synchronizer<DetectionPolicy>;
+  static std::unique_ptr<DetectionSync> makeDetectionSync(const Config& config);
+
+  /// The newest header stamp received on any input (since the last time jump), seconds.
+  double newestStamp() const;
+
  private:
   using RgbdPolicy =
       message_filters::sync_policies::ApproximateTime<sensor_msgs::Image, sensor_msgs::Image,
                                                       sensor_msgs::CameraInfo>;
-  using DetectionPolicy = message_filters::sync_policies::ApproximateTime<
-      sensor_msgs::Image, sensor_msgs::Image, sensor_msgs::CameraInfo, geofusion::DetectionArray>;
   using RgbdSync = message_filters::Synchronizer<RgbdPolicy>;
-  using DetectionSync = message_filters::Synchronizer<DetectionPolicy>;
 
   void makeSynchronizer();
   /// Watchdog bookkeeping and time-jump detection (restarts the synchroniser on a jump back).
@@ -106,6 +114,7 @@ class RgbdSubscriber {
   mutable std::mutex mutex_;
   std::unique_ptr<InputMonitor> monitor_;
   ros::Time last_rgb_stamp_;
+  double newest_stamp_s_ = 0.0;
 };
 
 }  // namespace geofusion

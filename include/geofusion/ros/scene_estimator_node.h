@@ -10,12 +10,14 @@
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
+#include <geofusion/LoadMap.h>
 #include <geofusion/SaveMap.h>
 #include <geofusion/SceneEstimatorConfig.h>
 #include <nav_msgs/Odometry.h>
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <std_srvs/Trigger.h>
+#include <tf2_msgs/TFMessage.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
@@ -40,6 +42,9 @@ class SceneEstimatorNode {
                const geofusion::DetectionArrayConstPtr& dets);
   void onTimeJump(const ros::Time& from, const ros::Time& to);
   void onOdometry(const nav_msgs::OdometryConstPtr& msg);
+  void onTf(const tf2_msgs::TFMessageConstPtr& msg);
+  EstimatorPipeline::CameraPose cameraPose(const geofusion::DetectionArray& dets);
+  void warnDropped(const sensor_msgs::Image& depth, const geofusion::DetectionArray& dets);
   void reportFailedStages(const KeyframeResult& result);
   void publish(const KeyframeResult& result, const std_msgs::Header& header);
   void broadcastCorrection(const ros::Time& stamp);
@@ -49,6 +54,8 @@ class SceneEstimatorNode {
   void onReconfigure(geofusion::SceneEstimatorConfig& config, uint32_t level);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   bool save(const std::string& prefix, std::string* message, std::vector<std::string>* files);
+  bool load(const std::string& path, std::string* message, int* objects);
+  bool onLoad(geofusion::LoadMap::Request& req, geofusion::LoadMap::Response& res);
 
   ros::NodeHandle nh_, pnh_;
   std::string map_frame_, odom_frame_;
@@ -60,9 +67,10 @@ class SceneEstimatorNode {
   GeoFusionConfig config_;  // the effective configuration (reconfigure changes it); under mutex_
 
   std::mutex mutex_;  // guards the pipeline and the last result
+  ModelSet models_;   // the model set (load_map looks classes up in it)
   std::unique_ptr<EstimatorPipeline> pipeline_;
   KeyframeResult last_;
-  std::size_t keyframes_ = 0, tf_failures_ = 0, bad_depth_ = 0;
+  std::size_t keyframes_ = 0;
   std::size_t failed_stages_ = 0;  // optimisation stages whose result was not used
 
   tf2_ros::Buffer tf_buffer_;
@@ -71,7 +79,7 @@ class SceneEstimatorNode {
   ros::Publisher map_pub_, markers_pub_, path_pub_, background_markers_pub_, background_cloud_pub_;
   ros::Publisher background_octomap_pub_;  // advertised only when built with octomap_msgs
   int background_publish_every_ = 5;
-  ros::ServiceServer save_srv_, reset_srv_;
+  ros::ServiceServer save_srv_, load_srv_, reset_srv_;
   diagnostic_updater::Updater diagnostics_;
   ros::WallTimer diagnostics_timer_;
   std::size_t frames_ = 0;                // synchronised sets received
@@ -86,6 +94,7 @@ class SceneEstimatorNode {
   std::string odom_topic_;
   ros::CallbackQueue odom_queue_;
   ros::Subscriber odom_sub_;
+  ros::Subscriber tf_sub_;  // stamps of odom -> base on /tf (odometry from TF)
   std::unique_ptr<ros::AsyncSpinner> odom_spinner_;
   ros::Time last_odom_stamp_;  // odometry thread only
   tf2_ros::Buffer odom_buffer_;
