@@ -48,6 +48,8 @@ std::size_t unsynchronisedFrames(const std::vector<std::size_t>& message_counts,
 }
 
 void OdometryTimeline::add(double stamp_s) {
+  // Time jumped back beyond the horizon (a looping bag): the old samples say nothing any more.
+  if (!stamps_.empty() && stamp_s + horizon_s_ < stamps_.back()) stamps_.clear();
   stamps_.insert(std::upper_bound(stamps_.begin(), stamps_.end(), stamp_s), stamp_s);
   while (!stamps_.empty() && stamps_.front() < stamps_.back() - horizon_s_) stamps_.pop_front();
 }
@@ -72,7 +74,9 @@ FrameDrop FrameGate::admit(double stamp_s, double newest_s) {
 }
 
 FrameDrop FrameGate::checkOdometry(double stamp_s, const OdometryTimeline& odometry) const {
-  if (odometry.empty()) return FrameDrop::kNone;
+  // No sample before the frame (odometry starting, or the timeline just reset): nothing to judge;
+  // the pose look-up decides.
+  if (!odometry.hasSampleBefore(stamp_s)) return FrameDrop::kNone;
   return odometry.gapAround(stamp_s) > config_.max_odometry_gap_s ? FrameDrop::kOdometryGap
                                                                   : FrameDrop::kNone;
 }

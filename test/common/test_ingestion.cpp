@@ -34,6 +34,9 @@ TEST(OdometryTimeline, ForgetsSamplesBeyondItsHorizon) {
   EXPECT_LE(odometry.size(), 102u);
   EXPECT_TRUE(std::isinf(odometry.gapAround(50.0)));
   EXPECT_NEAR(odometry.gapAround(95.05), 0.1, 1e-9);
+  // A jump back in time beyond the horizon (a looping bag) starts over.
+  odometry.add(1.0);
+  EXPECT_EQ(odometry.size(), 1u);
 }
 
 TEST(FrameGate, DropsFramesOutOfOrderStaleOrInAnOdometryGap) {
@@ -52,6 +55,9 @@ TEST(FrameGate, DropsFramesOutOfOrderStaleOrInAnOdometryGap) {
 
   OdometryTimeline odometry;
   EXPECT_EQ(gate.checkOdometry(1.0, odometry), FrameDrop::kNone);  // no timeline: not judged
+  odometry.add(1.5);
+  EXPECT_EQ(gate.checkOdometry(1.0, odometry), FrameDrop::kNone);  // none before: not judged
+  odometry.clear();
   odometry.add(0.0);
   odometry.add(0.2);
   odometry.add(5.2);

@@ -69,9 +69,7 @@ class OdometryTimeline {
   bool hasSampleBefore(double stamp_s) const {
     return !stamps_.empty() && stamps_.front() <= stamp_s;
   }
-  bool hasSampleAfter(double stamp_s) const {
-    return !stamps_.empty() && stamps_.back() > stamp_s;
-  }
+  bool hasSampleAfter(double stamp_s) const { return !stamps_.empty() && stamps_.back() > stamp_s; }
 
   /// The time between the last sample at or before `stamp_s` and the first after it; 0 when a
   /// sample has this very stamp; with none after yet, the time since the last one; infinity
@@ -94,7 +92,7 @@ class FrameGate {
   /// kNone when a frame stamped `stamp_s` may be used when the newest input stamp is `newest_s`;
   /// else why not. Out-of-order is judged against the frames admitted before.
   FrameDrop admit(double stamp_s, double newest_s);
-  /// kNone when the odometry around `stamp_s` is dense enough (an empty timeline: not judged).
+  /// kNone when the odometry around `stamp_s` is dense enough (no sample before it: not judged).
   FrameDrop checkOdometry(double stamp_s, const OdometryTimeline& odometry) const;
 
   /// After a time jump (a looping bag, a reset): anything goes again.
