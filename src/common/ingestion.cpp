@@ -26,18 +26,17 @@ std::size_t FrameDropCounts::total() const {
   return n;
 }
 
+std::string reasonsLine(const std::vector<std::pair<std::string, std::size_t>>& counts) {
+  std::ostringstream os;
+  for (std::size_t i = 0; i < counts.size(); ++i)
+    os << (i ? ", " : "") << counts[i].second << " " << counts[i].first;
+  return os.str();
+}
+
 std::string FrameDropCounts::summary() const {
   if (total() == 0) return "none dropped";
-  std::ostringstream os;
-  os << total() << " dropped (";
-  bool first = true;
-  for (std::size_t i = 0; i < count.size(); ++i) {
-    if (count[i] == 0) continue;
-    os << (first ? "" : ", ") << count[i] << " " << toString(static_cast<FrameDrop>(i));
-    first = false;
-  }
-  os << ")";
-  return os.str();
+  return std::to_string(total()) + " dropped (" + reasonsLine(countsByReason<FrameDrop>(count)) +
+         ")";
 }
 
 std::size_t unsynchronisedFrames(const std::vector<std::size_t>& message_counts,

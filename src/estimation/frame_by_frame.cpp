@@ -1,5 +1,6 @@
 #include "geofusion/estimation/frame_by_frame.h"
 
+#include "geofusion/common/ingestion.h"
 #include "geofusion/common/pose_validation.h"
 
 #include <algorithm>
@@ -41,16 +42,7 @@ void DetectionTally::add(const DetectionTally& other) {
 std::string DetectionTally::summary() const {
   std::ostringstream os;
   os << frames << " frames, " << accepted << " detections used, " << totalSkipped() << " skipped";
-  if (totalSkipped() > 0) {
-    os << " (";
-    bool first = true;
-    for (std::size_t i = 0; i < skipped.size(); ++i) {
-      if (skipped[i] == 0) continue;
-      os << (first ? "" : ", ") << skipped[i] << " " << toString(static_cast<SkipReason>(i));
-      first = false;
-    }
-    os << ")";
-  }
+  if (totalSkipped() > 0) os << " (" << reasonsLine(countsByReason<SkipReason>(skipped)) << ")";
   return os.str();
 }
 

@@ -286,7 +286,7 @@ bool readRunResults(const std::string& path, const ModelSet& models, RunResults*
                                       std::pair{"detections_dropped", &r.detections_dropped}}) {
       if (!root[key]) continue;
       for (const auto& kv : root[key])
-        counts->emplace_back(kv.first.as<std::string>(), kv.second.as<int>());
+        counts->emplace_back(kv.first.as<std::string>(), kv.second.as<std::size_t>());
     }
     r.keyframes_over_budget = root["keyframes_over_budget"].as<int>(0);
     for (const YAML::Node& k : root["keyframes"]) {

@@ -214,24 +214,6 @@ std::string noKeyframeReport(const Options& o, const rosbag::Bag& bag, const Sta
   return s.str();
 }
 
-std::vector<std::pair<std::string, int>> countsByReason(const geofusion::FrameDropCounts& drops) {
-  std::vector<std::pair<std::string, int>> out;
-  for (std::size_t i = 1; i < drops.count.size(); ++i)
-    if (drops.count[i] > 0)
-      out.emplace_back(toString(static_cast<geofusion::FrameDrop>(i)),
-                       static_cast<int>(drops.count[i]));
-  return out;
-}
-
-std::vector<std::pair<std::string, int>> countsByReason(const geofusion::DetectionTally& tally) {
-  std::vector<std::pair<std::string, int>> out;
-  for (std::size_t i = 0; i < tally.skipped.size(); ++i)
-    if (tally.skipped[i] > 0)
-      out.emplace_back(toString(static_cast<geofusion::SkipReason>(i)),
-                       static_cast<int>(tally.skipped[i]));
-  return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -424,8 +406,8 @@ int main(int argc, char** argv) {
   // Of the synchronised frames; those that never made a set are in frames_dropped.
   results.frames_skipped =
       static_cast<int>(pipeline.drops().total() - pipeline.drops().of(FrameDrop::kUnsynchronised));
-  results.frames_dropped = countsByReason(pipeline.drops());
-  results.detections_dropped = countsByReason(pipeline.tally());
+  results.frames_dropped = countsByReason<FrameDrop>(pipeline.drops().count);
+  results.detections_dropped = countsByReason<SkipReason>(pipeline.tally().skipped);
   results.keyframes_over_budget = static_cast<int>(pipeline.budgetOverruns());
   results.wall_time_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

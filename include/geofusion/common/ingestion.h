@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <deque>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace geofusion {
@@ -37,6 +38,20 @@ struct IngestionConfig {
   /// A keyframe taking longer than this is an overrun: counted, diagnostics WARN, ms.
   double keyframe_budget_ms = 200.0;
 };
+
+/// The nonzero counts of a table indexed by a reason enum, with the reasons' words (toString of
+/// the enum): what the summaries print and the results files list.
+template <typename Reason, std::size_t N>
+std::vector<std::pair<std::string, std::size_t>> countsByReason(
+    const std::array<std::size_t, N>& counts) {
+  std::vector<std::pair<std::string, std::size_t>> out;
+  for (std::size_t i = 0; i < N; ++i)
+    if (counts[i] > 0) out.emplace_back(toString(static_cast<Reason>(i)), counts[i]);
+  return out;
+}
+
+/// "2 out of order, 1 odometry gap": countsByReason as one line.
+std::string reasonsLine(const std::vector<std::pair<std::string, std::size_t>>& counts);
 
 /// Frames dropped, by reason.
 struct FrameDropCounts {

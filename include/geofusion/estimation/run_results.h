@@ -24,7 +24,7 @@ struct RunResults {
   int frames_seen = 0;       ///< synchronised RGB-D + detection sets
   int frames_skipped = 0;    ///< ... of which dropped (the sum of frames_dropped)
   /// Inputs not used, by reason (FrameDrop's and SkipReason's words): frames and detections.
-  std::vector<std::pair<std::string, int>> frames_dropped, detections_dropped;
+  std::vector<std::pair<std::string, std::size_t>> frames_dropped, detections_dropped;
   int keyframes_over_budget = 0;  ///< keyframes longer than input.keyframe_budget_ms
   std::vector<KeyframeResult> keyframes;
   KeyframeResult final_map;    ///< after SceneEstimator::finish()
