@@ -67,9 +67,7 @@ class EstimatorReplayTest(unittest.TestCase):
             self.markers.append(msg)
 
     def test_replay(self):
-        subprocess.check_call([util.find_tool('generate_dataset'), '--suite', 'demo', '--out-dir',
-                               self.dir, '--keyframes', str(KEYFRAMES), '--previews', '0'],
-                              stdout=subprocess.DEVNULL)
+        util.generate_demo(self.dir, KEYFRAMES)
         gt = util.load_yaml(os.path.join(self.dir, 'demo_01_gt.yaml'))
         self.assertTrue(util.wait_for_graph(util.INPUT_TOPICS, [NS + '/object_map']),
                         'the estimator did not come up')
@@ -130,7 +128,11 @@ class EstimatorReplayTest(unittest.TestCase):
         mine = [d for d in self.diagnostics if 'scene estimator' in d.name]
         self.assertTrue(mine, 'no diagnostics from the estimator')
         last = mine[-1]
-        self.assertEqual(last.level, DiagnosticStatus.OK, last.message)
+        # OK; a keyframe over the time budget (a busy machine) is the only WARN allowed: timing is
+        # the benchmark's to measure, not this test's.
+        if last.level != DiagnosticStatus.OK:
+            self.assertEqual(last.message,
+                             'the last keyframe took longer than input.keyframe_budget_ms')
         values = {kv.key: kv.value for kv in last.values}
         self.assertGreaterEqual(int(values['keyframes']), KEYFRAMES - 1)
         self.assertIn('last keyframe ms: stage II', values)

@@ -44,9 +44,7 @@ class EstimatorFaultsTest(unittest.TestCase):
             self.diagnostics.extend(s for s in msg.status if 'scene estimator' in s.name)
 
     def test_faults_are_counted_and_decided_as_offline(self):
-        subprocess.check_call([util.find_tool('generate_dataset'), '--suite', 'demo', '--out-dir',
-                               self.dir, '--keyframes', str(KEYFRAMES), '--previews', '0'],
-                              stdout=subprocess.DEVNULL)
+        util.generate_demo(self.dir, KEYFRAMES)
         good = os.path.join(self.dir, 'demo_01.bag')
         gap_bag, flood_bag, bag = (os.path.join(self.dir, n + '.bag')
                                    for n in ('gap', 'flood', 'faulty'))

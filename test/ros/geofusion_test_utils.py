@@ -28,6 +28,14 @@ def make_bag(name, *args):
     return bag, gt
 
 
+def generate_demo(out_dir, keyframes):
+    """Generates the demo suite's recording into out_dir; returns the path of demo_01.bag."""
+    subprocess.check_call([find_tool('generate_dataset'), '--suite', 'demo', '--out-dir', out_dir,
+                           '--keyframes', str(keyframes), '--previews', '0'],
+                          stdout=subprocess.DEVNULL)
+    return os.path.join(out_dir, 'demo_01.bag')
+
+
 def wait_for_graph(subscribed_topics, published_topics, timeout_s=30.0):
     """Waits (wall time) until every topic has a subscriber / publisher registered."""
     master = rosgraph.Master('/geofusion_test')

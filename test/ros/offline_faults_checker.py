@@ -24,9 +24,7 @@ class OfflineFaultsTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         cls.dir = tempfile.mkdtemp(prefix='geofusion_faults_')
-        subprocess.check_call([util.find_tool('generate_dataset'), '--suite', 'demo', '--out-dir',
-                               cls.dir, '--keyframes', str(KEYFRAMES), '--previews', '0'],
-                              stdout=subprocess.DEVNULL)
+        util.generate_demo(cls.dir, KEYFRAMES)
         cls.good = os.path.join(cls.dir, 'demo_01.bag')
         cls.baseline = cls.run_offline(cls.good, 'good')
 

@@ -29,9 +29,7 @@ class OfflineRunnerTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         cls.dir = tempfile.mkdtemp(prefix='geofusion_runner_')
-        subprocess.check_call([util.find_tool('generate_dataset'), '--suite', 'demo', '--out-dir',
-                               cls.dir, '--keyframes', str(KEYFRAMES), '--previews', '0'],
-                              stdout=subprocess.DEVNULL)
+        util.generate_demo(cls.dir, KEYFRAMES)
         cls.bag = os.path.join(cls.dir, 'demo_01.bag')
         cls.gt = load(os.path.join(cls.dir, 'demo_01_gt.yaml'))
         cls.results = {}
