@@ -47,8 +47,9 @@ std::size_t unsynchronisedFrames(const std::vector<std::size_t>& message_counts,
 }
 
 void OdometryTimeline::add(double stamp_s) {
-  // Time jumped back beyond the horizon (a looping bag): the old samples say nothing any more.
-  if (!stamps_.empty() && stamp_s + horizon_s_ < stamps_.back()) stamps_.clear();
+  // Time jumped back (a looping bag): the samples of the old timeline say nothing any more.
+  if (!stamps_.empty() && stamp_s + std::min(jump_back_s_, horizon_s_) < stamps_.back())
+    stamps_.clear();
   stamps_.insert(std::upper_bound(stamps_.begin(), stamps_.end(), stamp_s), stamp_s);
   while (!stamps_.empty() && stamps_.front() < stamps_.back() - horizon_s_) stamps_.pop_front();
 }

@@ -488,6 +488,11 @@ class Table {
          [](GeoFusionConfig& c) { return &c.node.save_on_shutdown; });
     integer("node.background_publish_every", 1, 10000, "publish the background every N keyframes",
             [](GeoFusionConfig& c) { return &c.node.background_publish_every; });
+    flag("node.publish_object_frames",
+         "every object as TF frame <object_frame_prefix><id> under the map frame",
+         [](GeoFusionConfig& c) { return &c.node.publish_object_frames; });
+    text("node.object_frame_prefix", "TF frame name of an object: this prefix, then its id",
+         [](GeoFusionConfig& c) { return &c.node.object_frame_prefix; });
   }
 };
 

@@ -298,6 +298,7 @@ void SceneEstimatorNode::publish(const KeyframeResult& result, const std_msgs::H
   }
   path_pub_.publish(path);
   broadcastCorrection(header.stamp);
+  broadcastObjects(result, header);
   // Every N-th keyframe from the first, and on a reset (an empty map).
   if ((keyframes_ - 1) % static_cast<std::size_t>(background_publish_every_) == 0 ||
       result.objects.empty()) {
@@ -344,6 +345,21 @@ void SceneEstimatorNode::broadcastCorrection(const ros::Time& stamp) {
   t.header.frame_id = map_frame_;
   t.child_frame_id = odom_frame_;
   tf_broadcaster_.sendTransform(t);
+}
+
+// Every object of the map as a TF frame under the map frame (the same ids as ObjectMap's
+// objects); removed objects are no longer sent, so their frames age out of TF buffers.
+void SceneEstimatorNode::broadcastObjects(const KeyframeResult& result,
+                                          const std_msgs::Header& header) {
+  if (!config_.node.publish_object_frames || result.objects.empty()) return;
+  std::vector<geometry_msgs::TransformStamped> frames;
+  for (const ObjectEstimate& o : result.objects) {
+    geometry_msgs::TransformStamped t = tf2::eigenToTransform(o.T_map_obj);
+    t.header = header;
+    t.child_frame_id = config_.node.object_frame_prefix + std::to_string(messageId(o.id));
+    frames.push_back(t);
+  }
+  tf_broadcaster_.sendTransform(frames);
 }
 
 void SceneEstimatorNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {

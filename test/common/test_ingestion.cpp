@@ -13,6 +13,7 @@ TEST(OdometryTimeline, TellsTheGapAroundAStamp) {
   for (double t = 0.0; t < 1.001; t += 0.1) odometry.add(t);
   odometry.add(6.0);  // five seconds without odometry
   odometry.add(6.1);
+  ASSERT_EQ(odometry.size(), 13u);
   EXPECT_NEAR(odometry.gapAround(0.55), 0.1, 1e-9);
   EXPECT_DOUBLE_EQ(odometry.gapAround(0.5), 0.0);
   EXPECT_NEAR(odometry.gapAround(3.0), 5.0, 1e-9);
@@ -23,9 +24,13 @@ TEST(OdometryTimeline, TellsTheGapAroundAStamp) {
   EXPECT_TRUE(odometry.hasSampleBefore(6.15));
   EXPECT_FALSE(odometry.hasSampleAfter(6.15));
   EXPECT_FALSE(odometry.hasSampleBefore(-0.1));
-  // A sample arriving late goes in its place.
-  odometry.add(3.0);
-  EXPECT_NEAR(odometry.gapAround(2.0), 2.0, 1e-9);
+  // A sample arriving late goes in its place (here 3.1 s late, with jump_back_s raised to 5 s).
+  OdometryTimeline tolerant(120.0, 5.0);
+  for (double t : {0.0, 0.1, 1.0, 6.0, 6.1}) tolerant.add(t);
+  tolerant.add(3.0);
+  EXPECT_NEAR(tolerant.gapAround(2.0), 2.0, 1e-9);
+  odometry.add(3.0);  // with the default 1 s, that is time jumping back: start over
+  EXPECT_EQ(odometry.size(), 1u);
 }
 
 TEST(OdometryTimeline, ForgetsSamplesBeyondItsHorizon) {
@@ -34,7 +39,9 @@ TEST(OdometryTimeline, ForgetsSamplesBeyondItsHorizon) {
   EXPECT_LE(odometry.size(), 102u);
   EXPECT_TRUE(std::isinf(odometry.gapAround(50.0)));
   EXPECT_NEAR(odometry.gapAround(95.05), 0.1, 1e-9);
-  // A jump back in time beyond the horizon (a looping bag) starts over.
+  // A jump back in time (a looping bag) starts over; a sample a little late goes in its place.
+  odometry.add(99.5);
+  EXPECT_GT(odometry.size(), 2u);
   odometry.add(1.0);
   EXPECT_EQ(odometry.size(), 1u);
 }

@@ -124,6 +124,14 @@ class EstimatorReplayTest(unittest.TestCase):
         for o in final.objects:
             inside = [p for p in points if inside_box(o, p)]
             self.assertFalse(inside, 'background voxels inside %s' % o.class_name)
+        # Every object is a TF frame object_<id> under map, at the map's pose.
+        for o in final.objects:
+            t = self.tf_buffer.lookup_transform('map', 'object_%d' % o.id, final.header.stamp,
+                                                rospy.Duration(2.0))
+            p = o.pose.pose.position
+            self.assertAlmostEqual(t.transform.translation.x, p.x, places=6)
+            self.assertAlmostEqual(t.transform.translation.y, p.y, places=6)
+            self.assertAlmostEqual(t.transform.translation.z, p.z, places=6)
         # Diagnostics: running, with the keyframe count and the stage times.
         mine = [d for d in self.diagnostics if 'scene estimator' in d.name]
         self.assertTrue(mine, 'no diagnostics from the estimator')
@@ -228,6 +236,13 @@ class EstimatorReplayTest(unittest.TestCase):
             drawn = {m.id for m in shown.markers if m.ns == 'objects'}
             self.assertEqual(drawn, {o.id for o in after.objects})
             self.assertFalse(drawn & gone, 'markers left behind for removed objects')
+            # A removed object's TF frame is no longer sent: not there at the new map's time
+            # (unless it comes back to the map later: a candidate confirmed again).
+            later = {o.id for m in maps if m.header.stamp > after.header.stamp for o in m.objects}
+            for i in gone - later:
+                self.assertFalse(self.tf_buffer.can_transform('map', 'object_%d' % i,
+                                                              after.header.stamp),
+                                 'object_%d still on TF after its removal' % i)
             if after.objects:  # a reset empties the map too; count removals only
                 removed_on_show += len(gone)
         self.assertGreater(removed_on_show, 0, 'no object left the map while on show')

@@ -73,8 +73,11 @@ std::size_t unsynchronisedFrames(const std::vector<std::size_t>& message_counts,
 /// messages), to tell a pose interpolated between close samples from one guessed across a gap.
 class OdometryTimeline {
  public:
-  /// Samples older than the newest by more than this are forgotten (bounded memory), s.
-  explicit OdometryTimeline(double horizon_s = 120.0) : horizon_s_(horizon_s) {}
+  /// Samples older than the newest by more than `horizon_s` are forgotten (bounded memory); a
+  /// sample older than the newest by more than `jump_back_s` means time jumped back (a looping
+  /// bag, a restarted driver): the timeline starts over from it. Seconds.
+  explicit OdometryTimeline(double horizon_s = 120.0, double jump_back_s = 1.0)
+      : horizon_s_(horizon_s), jump_back_s_(jump_back_s) {}
 
   void add(double stamp_s);
   void clear() { stamps_.clear(); }
@@ -92,7 +95,7 @@ class OdometryTimeline {
   double gapAround(double stamp_s) const;
 
  private:
-  double horizon_s_;
+  double horizon_s_, jump_back_s_;
   std::deque<double> stamps_;  ///< sorted
 };
 

@@ -38,6 +38,10 @@ struct NodeConfig {
   bool publish_map_to_odom = true;   ///< broadcast map -> odom at every keyframe
   std::string save_on_shutdown;      ///< save the map to this path prefix at shutdown ("": no)
   int background_publish_every = 5;  ///< publish the background every N keyframes
+  /// Every object of the map as a TF frame <object_frame_prefix><id> under the map frame, at
+  /// every keyframe; a removed object's frame is no longer sent.
+  bool publish_object_frames = true;
+  std::string object_frame_prefix = "object_";
 };
 
 /// Where the object models come from: a name of the model-set table (primitives, ycb_video) or

@@ -48,6 +48,7 @@ class SceneEstimatorNode {
   void reportFailedStages(const KeyframeResult& result);
   void publish(const KeyframeResult& result, const std_msgs::Header& header);
   void broadcastCorrection(const ros::Time& stamp);
+  void broadcastObjects(const KeyframeResult& result, const std_msgs::Header& header);
   void publishBackground(const std_msgs::Header& header);
   bool onSave(geofusion::SaveMap::Request& req, geofusion::SaveMap::Response& res);
   bool onReset(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
