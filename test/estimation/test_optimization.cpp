@@ -312,7 +312,9 @@ TEST(Relations, TouchingVerticalFacesAreNoSupport) {
   ASSERT_EQ(contacts.size(), 3u);
   for (const auto& c : contacts) {
     EXPECT_EQ(c.object_a == -1, c.support());
-    if (!c.support()) EXPECT_EQ(c.kind, ContactKind::kSide);
+    if (!c.support()) {
+      EXPECT_EQ(c.kind, ContactKind::kSide);
+    }
   }
 }
 
