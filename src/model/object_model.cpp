@@ -154,7 +154,7 @@ bool ModelSet::load(const std::string& yaml_path, const std::string& models_dir,
     errors->push_back("model set '" + yaml_path + "' cannot be read: " + e.what());
     return false;
   }
-  if (!root["classes"] || !root["classes"].IsSequence()) {
+  if (!root.IsMap() || !root["classes"] || !root["classes"].IsSequence()) {
     errors->push_back("model set '" + yaml_path + "' has no 'classes' list");
     return false;
   }
