@@ -4,10 +4,12 @@
 #   make data SUITE=demo|bench|bench_rgb   generate (or reuse) a data suite in ~/.cache/geofusion/data
 #   make bench [SUITE=demo]      the benchmark: four methods, report in results/<suite>/
 #   make vo-bench                the visual odometry benchmark, report in results/vo/
-.PHONY: demo test data bench vo-bench deps build lint clean help
+#   make test-asan               every test built with ASan + UBSan in its own workspace, run by ctest
+#   make fuzz [FUZZ_RUNS=N]      libFuzzer (clang 14) on the input parsers, 1000000 runs per target
+.PHONY: demo test test-asan fuzz data bench vo-bench deps build lint clean help
 
 help:
-	@sed -n '2,7p' Makefile
+	@sed -n '2,9p' Makefile
 
 deps:
 	@bash scripts/install_deps.sh
@@ -17,6 +19,12 @@ build: deps
 
 test: build
 	@bash scripts/test.sh
+
+test-asan:
+	@bash scripts/test_asan.sh
+
+fuzz:
+	@bash scripts/fuzz.sh
 
 demo: build
 	@bash scripts/demo.sh

@@ -33,7 +33,8 @@ ALLOWED = {
 FOLDERS = [("include/geofusion/%s/" % m, m) for m in ALLOWED] + \
           [("src/%s/" % m, m) for m in ALLOWED] + \
           [("src/nodes/", "ros")]
-ROS_FOLDERS = ("include/geofusion/ros/", "src/ros/", "src/nodes/", "src/tools/", "test/ros/")
+ROS_FOLDERS = ("include/geofusion/ros/", "src/ros/", "src/nodes/", "src/tools/", "test/ros/",
+               "test/fuzz/")
 
 GEOFUSION_INCLUDE = re.compile(r'^\s*#\s*include\s*[<"]geofusion/([a-z_]+)/[^>"]+[>"]')
 ROS_INCLUDE = re.compile(

@@ -241,6 +241,7 @@ sensor_msgs::PointCloud2 pointCloud(const std::vector<Eigen::Vector3d>& points,
   sensor_msgs::PointCloud2Modifier modifier(cloud);
   modifier.setPointCloud2FieldsByString(1, "xyz");
   modifier.resize(points.size());
+  if (points.empty()) return cloud;  // an iterator on no data binds a reference to data.front()
   sensor_msgs::PointCloud2Iterator<float> x(cloud, "x"), y(cloud, "y"), z(cloud, "z");
   for (const auto& p : points) {
     *x = static_cast<float>(p.x()), *y = static_cast<float>(p.y()), *z = static_cast<float>(p.z());

@@ -1,0 +1,67 @@
+#include "fuzz_targets.h"
+
+#include "geofusion/estimation/frame_by_frame.h"
+#include "geofusion/ros/conversions.h"
+
+#include <geofusion/DetectionArray.h>
+#include <ros/serialization.h>
+#include <rosbag/bag.h>
+#include <rosbag/exceptions.h>
+#include <rosbag/view.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <tf2_msgs/TFMessage.h>
+
+#include <string>
+#include <vector>
+
+namespace geofusion {
+namespace fuzz {
+
+int fuzzBag(const std::uint8_t* data, std::size_t size) {
+  const std::string path = writeScratchFile("input.bag", data, size);
+  const FrameByFrame checker;
+  try {
+    rosbag::Bag bag;
+    bag.open(path, rosbag::bagmode::Read);
+    // As run_offline: the whole recording's extent, then every message of the input types.
+    rosbag::View view(bag);
+    (void)(view.getEndTime() - view.getBeginTime()).toSec();
+    std::size_t messages = 0;
+    for (const rosbag::MessageInstance& m : view) {
+      ++messages;
+      const std::string topic = m.getTopic();
+      (void)m.getTime().toSec();
+      if (const auto image = m.instantiate<sensor_msgs::Image>()) {
+        std::vector<float> metres;
+        if (depthToMetres(*image, &metres))
+          FUZZ_CHECK(metres.size() == static_cast<std::size_t>(image->width) * image->height);
+        else
+          FUZZ_CHECK(depthProblem(*image) != nullptr);
+      } else if (const auto info = m.instantiate<sensor_msgs::CameraInfo>()) {
+        (void)intrinsicsFromCameraInfo(*info).valid();
+      } else if (const auto detections = m.instantiate<geofusion::DetectionArray>()) {
+        DetectionTally tally;
+        checker.process(fromMsg(*detections), Eigen::Isometry3d::Identity(), &tally);
+        FUZZ_CHECK(tally.accepted + tally.totalSkipped() == detections->detections.size());
+      } else if (const auto tf = m.instantiate<tf2_msgs::TFMessage>()) {
+        for (const auto& t : tf->transforms) (void)t.header.stamp.toSec();
+      }
+    }
+    FUZZ_CHECK(messages <= view.size());
+  } catch (const rosbag::BagException&) {
+    return 0;  // not a bag rosbag reads (run_offline says so and stops)
+  } catch (const ros::serialization::StreamOverrunException&) {
+    return 0;  // a message shorter than its type
+  }
+  return 0;
+}
+
+}  // namespace fuzz
+}  // namespace geofusion
+
+#ifdef GEOFUSION_LIBFUZZER
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  return geofusion::fuzz::fuzzBag(data, size);
+}
+#endif
