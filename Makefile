@@ -9,7 +9,7 @@
 .PHONY: demo test test-asan fuzz data bench vo-bench deps build lint clean help
 
 help:
-	@sed -n '2,9p' Makefile
+	@sed -n '2,8p' Makefile
 
 deps:
 	@bash scripts/install_deps.sh
