@@ -44,7 +44,11 @@ RunResults EstimatorPipeline::currentMap() {
   map.support_plane = estimator_->supportPlane();
   map.T_map_odom = estimator_->numKeyframes() > 0 ? estimator_->T_map_odom() : resumed_.T_map_odom;
   map.frames_seen = static_cast<int>(frames_seen_);
-  map.frames_skipped = static_cast<int>(drops_.total());
+  // Of the synchronised frames; those that never made a set are in frames_dropped only.
+  map.frames_skipped = static_cast<int>(drops_.total() - drops_.of(FrameDrop::kUnsynchronised));
+  map.frames_dropped = countsByReason<FrameDrop>(drops_.count);
+  map.detections_dropped = countsByReason<SkipReason>(tally_.skipped);
+  map.keyframes_over_budget = static_cast<int>(budget_overruns_);
   return map;
 }
 

@@ -398,17 +398,17 @@ int main(int argc, char** argv) {
               << "\nrun_offline: nothing written\n";
     return 1;
   }
-  results.final_map = pipeline.estimator().finish();
-  results.trajectory = pipeline.estimator().trajectory();
-  results.trajectory_stamps = pipeline.estimator().keyframeStamps();
-  results.support_plane = pipeline.estimator().supportPlane();
-  results.frames_seen = static_cast<int>(pipeline.framesSeen());
-  // Of the synchronised frames; those that never made a set are in frames_dropped.
-  results.frames_skipped =
-      static_cast<int>(pipeline.drops().total() - pipeline.drops().of(FrameDrop::kUnsynchronised));
-  results.frames_dropped = countsByReason<FrameDrop>(pipeline.drops().count);
-  results.detections_dropped = countsByReason<SkipReason>(pipeline.tally().skipped);
-  results.keyframes_over_budget = static_cast<int>(pipeline.budgetOverruns());
+  {
+    // The final solve and the pipeline's counts, with what only this run knows.
+    RunResults finished = pipeline.currentMap();
+    finished.method = std::move(results.method);
+    finished.config_yaml = std::move(results.config_yaml);
+    finished.source = std::move(results.source);
+    finished.model_set = std::move(results.model_set);
+    finished.recording_duration_s = results.recording_duration_s;
+    finished.keyframes = std::move(results.keyframes);
+    results = std::move(finished);
+  }
   results.wall_time_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   rusage usage{};
@@ -426,7 +426,6 @@ int main(int argc, char** argv) {
   if (!opt.save_map.empty()) {
     RunResults map = results;
     map.keyframes.clear();  // the map, not the run's record
-    map.T_map_odom = pipeline.estimator().T_map_odom();
     MapFiles files;
     if (!pipeline.saveMap(opt.save_map, std::move(map), &files, &error)) {
       std::cerr << "run_offline: --save-map: " << error << "\n";

@@ -79,7 +79,8 @@ class EstimatorPipeline {
   void reset();
 
   /// The map as it stands, ready for saveMap (map_store.h): the final solve's objects and
-  /// contacts, the trajectory, the support plane and map -> odom.
+  /// contacts, the trajectory, the support plane, map -> odom, and the frames and detections
+  /// used and dropped by reason.
   RunResults currentMap();
   /// Saves currentMap() and the background as one unit under `prefix`.
   bool saveMap(const std::string& prefix, RunResults map, MapFiles* files, std::string* error);
