@@ -14,7 +14,7 @@ PACKAGES=(
   ros-visualization-msgs libvisualization-msgs-dev python3-visualization-msgs
   ros-std-srvs libstd-srvs-dev python3-std-srvs libcv-bridge-dev libimage-transport-dev
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
-  libroslib-dev librosbag-dev python3-rosbag librostest-dev python3-rostest libdiagnostic-updater-dev
+  libroslib-dev librosbag-dev libtopic-tools-dev python3-rosbag librostest-dev python3-rostest libdiagnostic-updater-dev
   python3-diagnostic-msgs rviz
   # the core's libraries
   libeigen3-dev libceres-dev libpcl-conversions-dev libopencv-dev libmrpt-poses-dev libfcl-dev

@@ -37,6 +37,7 @@ class Table {
     background();
     visualOdometry();
     node();
+    visionMsgs();
   }
   std::vector<Setting> rows;
 
@@ -494,6 +495,12 @@ class Table {
     text("node.object_frame_prefix", "TF frame name of an object: this prefix, then its id",
          [](GeoFusionConfig& c) { return &c.node.object_frame_prefix; });
   }
+  void visionMsgs() {
+    text("vision_msgs.class_map",
+         "vision_msgs/Detection3DArray class id -> model-set class: \"\" for the model set's own "
+         "ids, else \"id: class_name, ...\" (only those ids are used)",
+         [](GeoFusionConfig& c) { return &c.vision_msgs.class_map; });
+  }
 };
 
 const Table& table() {
@@ -586,6 +593,8 @@ bool inRange(const Setting& s, double v) {
 bool setFromNode(const Setting& s, const YAML::Node& node, GeoFusionConfig* c, std::string* error) {
   auto bad = [&](const std::string& got) {
     *error = s.key + ": expected " + s.allowed() + ", got " + got;
+    if (s.type == Type::kString && !node.IsScalar())
+      *error += " (a text with ':' or '[' needs quotes: \"...\")";
     return false;
   };
   const std::string text =

@@ -2,6 +2,7 @@
 // configuration (the constructor throws) leaves the nodelet stopped with a FATAL message.
 #include "geofusion/ros/detection_viewer.h"
 #include "geofusion/ros/scene_estimator_node.h"
+#include "geofusion/ros/vision_detections_adapter.h"
 #include "geofusion/ros/visual_odometry_node.h"
 
 #include <nodelet/nodelet.h>
@@ -29,9 +30,11 @@ class NodeletOf : public nodelet::Nodelet {
 class DetectionViewerNodelet : public NodeletOf<DetectionViewer> {};
 class SceneEstimatorNodelet : public NodeletOf<SceneEstimatorNode> {};
 class VisualOdometryNodelet : public NodeletOf<VisualOdometryNode> {};
+class VisionDetectionsAdapterNodelet : public NodeletOf<VisionDetectionsAdapter> {};
 
 }  // namespace geofusion
 
 PLUGINLIB_EXPORT_CLASS(geofusion::DetectionViewerNodelet, nodelet::Nodelet)
 PLUGINLIB_EXPORT_CLASS(geofusion::SceneEstimatorNodelet, nodelet::Nodelet)
 PLUGINLIB_EXPORT_CLASS(geofusion::VisualOdometryNodelet, nodelet::Nodelet)
+PLUGINLIB_EXPORT_CLASS(geofusion::VisionDetectionsAdapterNodelet, nodelet::Nodelet)

@@ -92,6 +92,20 @@ std::string packageDir() {
   return ros::package::getPath("geofusion");
 }
 
+ModelSet loadNodeModelSet(const GeoFusionConfig& config) {
+  ModelSet models;
+  std::vector<std::string> errors;
+  if (!loadModelSet(config.model_set.name, config.model_set.dir, packageDir(), &models, &errors,
+                    config.model_set.surface_features)) {
+    std::string all;
+    for (const auto& e : errors) all += "\n  " + e;
+    throw std::runtime_error("model_set.name: cannot load the model set '" + config.model_set.name +
+                             "', not starting:" + all);
+  }
+  for (const auto& e : errors) ROS_WARN_STREAM("geofusion: " << e);
+  return models;
+}
+
 GeoFusionConfig loadNodeConfig(const ros::NodeHandle& pnh,
                                const std::vector<std::string>& extra_params) {
   GeoFusionConfig config;

@@ -48,16 +48,8 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   background_publish_every_ = config_.node.background_publish_every;
   method_name_ = toString(config_.estimator.method);
 
-  ModelSet& models = models_;
-  std::vector<std::string> errors;
-  if (!loadModelSet(config_.model_set.name, config_.model_set.dir, packageDir(), &models, &errors,
-                    config_.model_set.surface_features)) {
-    std::string all;
-    for (const auto& e : errors) all += "\n  " + e;
-    throw std::runtime_error("model_set.name: cannot load the model set '" +
-                             config_.model_set.name + "', not starting:" + all);
-  }
-  for (const auto& e : errors) ROS_WARN_STREAM("geofusion: " << e);
+  models_ = loadNodeModelSet(config_);
+  const ModelSet& models = models_;
   pipeline_ = std::make_unique<EstimatorPipeline>(
       models, config_.estimator, config_.keyframes, config_.checks,
       config_.background_enabled ? &config_.background : nullptr, config_.ingestion);

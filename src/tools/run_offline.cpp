@@ -23,6 +23,7 @@
 #include "geofusion/estimation/scene_estimator.h"
 #include "geofusion/ros/estimator_pipeline.h"
 #include "geofusion/ros/rgbd_subscriber.h"
+#include "geofusion/ros/vision_detections.h"
 #include "model_set_option.h"
 
 #include <geofusion/DetectionArray.h>
@@ -144,6 +145,21 @@ bool checkWritable(const std::string& path, std::string* error) {
 }
 
 // What a reader of a broken bag should do next.
+// A vision_msgs/Detection3DArray of the bag as the package's DetectionArray (null, with the
+// reason, when it is of another layout or does not decode).
+geofusion::DetectionArrayConstPtr fromVisionMsgs(const rosbag::MessageInstance& m,
+                                                 geofusion::VisionDetectionConverter* converter,
+                                                 std::string* error) {
+  std::vector<std::uint8_t> bytes(m.size());
+  ros::serialization::OStream stream(bytes.data(), static_cast<std::uint32_t>(bytes.size()));
+  m.write(stream);
+  auto out = boost::make_shared<geofusion::DetectionArray>();
+  if (!converter->convert(m.getDataType(), m.getMD5Sum(), bytes.data(), bytes.size(), out.get(),
+                          error))
+    return nullptr;
+  return out;
+}
+
 std::string bagHint(const std::string& bag) {
   return " (a truncated or unindexed bag, e.g. a recording killed before it closed? `rosbag "
          "reindex " +
@@ -184,14 +200,21 @@ std::string noKeyframeReport(const Options& o, const rosbag::Bag& bag, const Sta
       {o.depth_topic, "sensor_msgs/Image"},
       {o.info_topic, "sensor_msgs/CameraInfo"},
       {o.detections_topic, "geofusion/DetectionArray"}};
+  const auto accepted = [](const std::string& wanted, const std::string& type) {
+    return type == wanted ||
+           (wanted == "geofusion/DetectionArray" && type == geofusion::kVisionDetectionsType);
+  };
   bool missing = false;
   for (const auto& [topic, type] : wanted) {
     const auto it = types.find(topic);
     if (it == types.end()) {
       s << "\n  Missing: " << topic << " (" << type << "); set it with the --*-topic options";
       missing = true;
-    } else if (it->second != type) {
-      s << "\n  Wrong type: " << topic << " is " << it->second << ", expected " << type;
+    } else if (!accepted(type, it->second)) {
+      s << "\n  Wrong type: " << topic << " is " << it->second << ", expected " << type
+        << (type == "geofusion/DetectionArray"
+                ? std::string(" or ") + geofusion::kVisionDetectionsType
+                : "");
       missing = true;
     }
   }
@@ -272,6 +295,12 @@ int main(int argc, char** argv) {
     std::cerr << "run_offline: continuing the map " << opt.initial_map << " ("
               << resumed.final_map.objects.size() << " objects)\n";
   }
+  std::map<std::int64_t, ModelClass> class_map;
+  if (!makeVisionClassMap(config.vision_msgs.class_map, models, &class_map, &error)) {
+    std::cerr << "run_offline: " << error << "; nothing was run\n";
+    return 1;
+  }
+  VisionDetectionConverter vision(std::move(class_map));
   RunResults results;
   results.method = toString(method);
   results.config_yaml = configYaml(config);
@@ -374,8 +403,16 @@ int main(int argc, char** argv) {
         note(msg);
         sync->add<2>(ros::MessageEvent<sensor_msgs::CameraInfo const>(msg, m.getTime()));
       } else {
-        auto msg = m.instantiate<geofusion::DetectionArray>();
-        if (!msg) continue;
+        auto msg = m.getDataType() == kVisionDetectionsType
+                       ? fromVisionMsgs(m, &vision, &error)
+                       : m.instantiate<geofusion::DetectionArray>();
+        if (!msg) {
+          if (!error.empty() && warned++ < 5)
+            std::cerr << "run_offline: detections at " << m.getTime() << " dropped: " << error
+                      << "\n";
+          error.clear();
+          continue;
+        }
         note(msg);
         sync->add<3>(ros::MessageEvent<geofusion::DetectionArray const>(msg, m.getTime()));
       }
@@ -448,6 +485,12 @@ int main(int argc, char** argv) {
       results.final_map.contacts.size(), results.wall_time_s, duration,
       duration > 0 ? results.wall_time_s / duration : 0.0, opt.out.c_str());
   std::printf("run_offline: detections: %s\n", pipeline.tally().summary().c_str());
+  if (vision.counts().messages + vision.counts().rejected > 0) {
+    std::printf(
+        "run_offline: vision_msgs detections: %zu messages, %zu detections converted%s%s\n",
+        vision.counts().messages, vision.counts().detections,
+        vision.droppedSummary().empty() ? "" : "; dropped: ", vision.droppedSummary().c_str());
+  }
   if (results.keyframes_over_budget > 0) {
     std::cerr << "run_offline: warning: " << results.keyframes_over_budget << " of "
               << results.keyframes.size()

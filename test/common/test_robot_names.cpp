@@ -33,5 +33,20 @@ TEST(RobotNames, TheLaunchFilesRobotFileMatchesTheCodesDefaults) {
       << "config/robots/fetch.yaml has a name robot_names.h does not";
 }
 
+// The cameras' files (launch argument camera:=) name the same things as the Fetch's.
+TEST(RobotNames, EveryCameraFileNamesWhatTheFetchFileNames) {
+  const std::string dir = std::string(GEOFUSION_SOURCE_DIR) + "/config/robots/";
+  const YAML::Node fetch = YAML::LoadFile(dir + "fetch.yaml");
+  for (const char* camera : {"realsense", "azure_kinect", "openni2", "zed"}) {
+    const YAML::Node file = YAML::LoadFile(dir + camera + ".yaml");
+    EXPECT_EQ(file.size(), fetch.size()) << camera;
+    for (const auto& entry : fetch) {
+      const std::string key = entry.first.as<std::string>();
+      ASSERT_TRUE(file[key]) << key << " missing from config/robots/" << camera << ".yaml";
+      EXPECT_FALSE(file[key].as<std::string>().empty()) << camera << ": " << key;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace geofusion

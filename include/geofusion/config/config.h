@@ -44,6 +44,13 @@ struct NodeConfig {
   std::string object_frame_prefix = "object_";
 };
 
+/// Detections from vision_msgs/Detection3DArray (the adapter nodelet and run_offline): which
+/// model-set class a detector's class id stands for (plain data: the core never reads it).
+struct VisionMsgsConfig {
+  /// "" : each id is the model-set class with that id; else "id: class_name, ..." pairs.
+  std::string class_map;
+};
+
 /// Where the object models come from: a name of the model-set table (primitives, ycb_video) or
 /// the path of a model-set YAML, with its meshes' folder.
 struct ModelSetConfig {
@@ -66,6 +73,7 @@ struct GeoFusionConfig {
   BackgroundMapConfig background;
   VisualOdometryConfig visual_odometry;
   NodeConfig node;
+  VisionMsgsConfig vision_msgs;
 };
 
 /// One setting: its key in the YAML file (dotted path), type, allowed values, documentation and

@@ -10,6 +10,7 @@
 #pragma once
 
 #include "geofusion/config/config.h"
+#include "geofusion/model/object_model.h"
 
 #include <dynamic_reconfigure/Config.h>
 #include <ros/ros.h>
@@ -37,6 +38,10 @@ std::vector<std::string> fillReconfigure(const GeoFusionConfig& config,
 /// to settings by Setting::reconfigure_name); returns the problems, one sentence each.
 std::vector<std::string> applyReconfigure(const dynamic_reconfigure::Config& message,
                                           GeoFusionConfig* config);
+
+/// The model set of model_set.name / model_set.dir. Throws std::runtime_error naming the set and
+/// the reasons when it does not load (the node refuses to start); classes left out are warned.
+ModelSet loadNodeModelSet(const GeoFusionConfig& config);
 
 /// The path of the geofusion package (for the model-set table), or "" when ROS cannot find it.
 std::string packageDir();
