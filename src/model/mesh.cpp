@@ -100,6 +100,10 @@ TriangleMesh makeCylinder(double radius, double height, int segments) {
   return m;
 }
 
+void scaleMesh(double scale, TriangleMesh* mesh) {
+  for (auto& v : mesh->vertices) v *= static_cast<float>(scale);
+}
+
 bool loadMesh(const std::string& path, TriangleMesh* mesh, std::string* error) {
   std::ifstream probe(path);
   if (!probe) {
@@ -240,7 +244,11 @@ TriangleMesh convexHull(const std::vector<Eigen::Vector3f>& points) {
 }
 
 std::vector<Eigen::Vector3f> sampleSurfacePoints(const TriangleMesh& mesh, std::size_t count,
-                                                 std::uint32_t seed) {
+                                                 std::uint32_t seed,
+                                                 std::vector<Eigen::Vector3f>* normals,
+                                                 std::vector<Eigen::Vector2f>* uvs) {
+  if (normals) normals->clear();
+  if (uvs) uvs->clear();
   std::vector<Eigen::Vector3f> out;
   if (mesh.empty() || count == 0) return out;
   std::vector<double> cumulative;
@@ -266,6 +274,11 @@ std::vector<Eigen::Vector3f> sampleSurfacePoints(const TriangleMesh& mesh, std::
     }
     const Eigen::Vector3f a = mesh.vertices[t[0]], b = mesh.vertices[t[1]], c = mesh.vertices[t[2]];
     out.push_back(a + static_cast<float>(s) * (b - a) + static_cast<float>(r) * (c - a));
+    if (normals) normals->push_back((b - a).cross(c - a).normalized());
+    if (uvs && mesh.uvs.size() == mesh.vertices.size()) {
+      const Eigen::Vector2f ua = mesh.uvs[t[0]], ub = mesh.uvs[t[1]], uc = mesh.uvs[t[2]];
+      uvs->push_back(ua + static_cast<float>(s) * (ub - ua) + static_cast<float>(r) * (uc - ua));
+    }
   }
   return out;
 }

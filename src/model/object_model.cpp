@@ -174,6 +174,12 @@ bool ModelSet::load(const std::string& yaml_path, const std::string& models_dir,
       if (c["mesh"]) {
         m.mesh_path = resolve(dir, c["mesh"].as<std::string>());
         if (!loadMesh(m.mesh_path, &m.mesh, &error)) throw std::runtime_error(error);
+        if (c["scale"]) {
+          const double scale = c["scale"].as<double>();
+          if (!(scale > 0.0) || !std::isfinite(scale))
+            throw std::runtime_error("scale must be a number above 0");
+          scaleMesh(scale, &m.mesh);
+        }
       } else if (c["box"]) {
         m.mesh = makeBox(vec3(c["box"], "box size"));
       } else if (c["cylinder"]) {
@@ -186,6 +192,7 @@ bool ModelSet::load(const std::string& yaml_path, const std::string& models_dir,
         if (!loadPointsXyz(resolve(dir, c["points"].as<std::string>()), &m.points, &error)) {
           throw std::runtime_error(error);
         }
+        for (auto& p : m.points) p *= static_cast<float>(c["scale"].as<double>(1.0));
       }
       m.symmetry = parseSymmetry(c["symmetry"]);
       if (c["features"]) m.features = parseFeatures(c["features"]);

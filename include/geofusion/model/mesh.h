@@ -28,6 +28,8 @@ TriangleMesh makeBox(const Eigen::Vector3d& size);
 /// Cylinder of `radius` and `height` about the z axis, centred at the origin, `segments` sides.
 TriangleMesh makeCylinder(double radius, double height, int segments = 48);
 
+/// Every vertex multiplied by `scale` (units to metres).
+void scaleMesh(double scale, TriangleMesh* mesh);
 /// Loads a mesh file with assimp (all sub-meshes merged, triangulated). On failure returns false
 /// and `error` names the file and the reason (missing, unreadable, no triangles).
 bool loadMesh(const std::string& path, TriangleMesh* mesh, std::string* error);
@@ -43,9 +45,13 @@ TriangleMesh simplifyMesh(const TriangleMesh& mesh, std::size_t target_triangles
 /// Empty for fewer than 4 points or degenerate (flat) input.
 TriangleMesh convexHull(const std::vector<Eigen::Vector3f>& points);
 
-/// `count` points on the surface, area-weighted, deterministic for a given seed.
+/// `count` points on the surface, area-weighted, deterministic for a given seed; with `normals`,
+/// each point's triangle normal, with `uvs` its interpolated texture coordinates (when the mesh
+/// has them).
 std::vector<Eigen::Vector3f> sampleSurfacePoints(const TriangleMesh& mesh, std::size_t count,
-                                                 std::uint32_t seed = 1);
+                                                 std::uint32_t seed = 1,
+                                                 std::vector<Eigen::Vector3f>* normals = nullptr,
+                                                 std::vector<Eigen::Vector2f>* uvs = nullptr);
 
 /// Reads an "x y z" per line points file (YCB-Video points.xyz). False with `error` on failure.
 bool loadPointsXyz(const std::string& path, std::vector<Eigen::Vector3f>* points,
