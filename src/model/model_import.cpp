@@ -173,13 +173,25 @@ SymmetryTrial trial(const SurfaceDistance& surface, const Eigen::Vector3d& axis,
 
 }  // namespace
 
-Symmetry detectSymmetry(const TriangleMesh& mesh, const SymmetryDetectionConfig& config,
-                        std::vector<SymmetryTrial>* trials) {
-  Symmetry symmetry;
-  if (mesh.empty()) return symmetry;
+// The largest distance from the model origin to an axis of the symmetry through `centre`.
+double axisOffset(const Symmetry& symmetry, const Eigen::Vector3d& centre) {
+  std::vector<Eigen::Vector3d> axes;
+  if (symmetry.type == Symmetry::Type::kContinuous) axes.push_back(symmetry.axis);
+  for (const auto& q : symmetry.rotations) axes.push_back(Eigen::AngleAxisd(q).axis());
+  double offset = 0.0;
+  for (const auto& a : axes)
+    offset = std::max(offset, (centre - centre.dot(a.normalized()) * a.normalized()).norm());
+  return offset;
+}
+
+SymmetryDetection detectSymmetry(const TriangleMesh& mesh, const SymmetryDetectionConfig& config) {
+  SymmetryDetection out;
+  if (mesh.empty()) return out;
   const SurfaceDistance surface(mesh, config);
+  out.centre = surface.centre().cast<double>();
+  out.tolerance_m = surface.tolerance();
   const auto tried = [&](const SymmetryTrial& t) {
-    if (trials) trials->push_back(t);
+    out.trials.push_back(t);
     return t.maps_onto_itself();
   };
   const std::vector<Eigen::Vector3d> axes = candidateAxes(surface.queries());
@@ -189,9 +201,10 @@ Symmetry detectSymmetry(const TriangleMesh& mesh, const SymmetryDetectionConfig&
     for (double angle : config.continuous_angles_deg)
       all = tried(trial(surface, axis, angle)) && all;
     if (all) {
-      symmetry.type = Symmetry::Type::kContinuous;
-      symmetry.axis = axis;
-      return symmetry;
+      out.symmetry.type = Symmetry::Type::kContinuous;
+      out.symmetry.axis = axis;
+      out.axis_offset_m = axisOffset(out.symmetry, out.centre);
+      return out;
     }
   }
   // Discrete: per axis the largest order n whose rotations (every multiple of 360/n) all pass.
@@ -204,9 +217,6 @@ Symmetry detectSymmetry(const TriangleMesh& mesh, const SymmetryDetectionConfig&
       if (!all) continue;
       for (int k = 1; k < n; ++k) {
         const Eigen::Quaterniond q(Eigen::AngleAxisd(2.0 * M_PI * k / n, axis));
-        Symmetry one;
-        one.type = Symmetry::Type::kDiscrete;
-        one.rotations = {q};
         const bool known = std::any_of(
             found.rotations.begin(), found.rotations.end(),
             [&](const Eigen::Quaterniond& r) { return r.angularDistance(q) < 3.0 * M_PI / 180.0; });
@@ -215,8 +225,9 @@ Symmetry detectSymmetry(const TriangleMesh& mesh, const SymmetryDetectionConfig&
       break;
     }
   }
-  if (!found.rotations.empty()) symmetry = found;
-  return symmetry;
+  if (!found.rotations.empty()) out.symmetry = found;
+  out.axis_offset_m = axisOffset(out.symmetry, out.centre);
+  return out;
 }
 
 namespace {

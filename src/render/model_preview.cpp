@@ -106,22 +106,25 @@ void drawFeatures(const SurfaceFeatures& features, double size, View* view) {
   }
 }
 
-void drawSymmetry(const Symmetry& symmetry, double size, View* view) {
+void drawSymmetry(const Symmetry& symmetry, const Eigen::Vector3d& centre, double size,
+                  View* view) {
   const cv::Scalar colour(255, 255, 0);
   std::vector<Eigen::Vector3d> axes;
   if (symmetry.type == Symmetry::Type::kContinuous) axes.push_back(symmetry.axis);
   for (const auto& q : symmetry.rotations) axes.push_back(Eigen::AngleAxisd(q).axis());
   for (const auto& a : axes) {
-    for (int k = -6; k < 6; k += 2)  // dashed, through the model origin
-      view->line(a * (0.75 * size * k / 6), a * (0.75 * size * (k + 1) / 6), colour, 1);
+    for (int k = -6; k < 6; k += 2)  // dashed, through the centre
+      view->line(centre + a * (0.75 * size * k / 6), centre + a * (0.75 * size * (k + 1) / 6),
+                 colour, 1);
   }
 }
 
 }  // namespace
 
 bool writeModelPreview(const TriangleMesh& mesh, const SurfaceFeatures& features,
-                       const Symmetry& symmetry, const std::vector<std::string>& caption,
-                       const std::string& path, std::string* error) {
+                       const Symmetry& symmetry, const Eigen::Vector3d& symmetry_centre,
+                       const std::vector<std::string>& caption, const std::string& path,
+                       std::string* error) {
   OffscreenRenderer renderer;
   const MeshHandle handle = renderer.ok() ? renderer.addMesh(mesh) : -1;
   if (handle < 0) {
@@ -151,7 +154,7 @@ bool writeModelPreview(const TriangleMesh& mesh, const SurfaceFeatures& features
     cv::Mat image = shadedRender(images, K);
     View view(K, item.T_cam_model, &image);
     drawFeatures(features, size, &view);
-    drawSymmetry(symmetry, size, &view);
+    drawSymmetry(symmetry, symmetry_centre, size, &view);
     views.push_back(image);
   }
   cv::Mat both;

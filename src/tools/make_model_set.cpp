@@ -117,14 +117,24 @@ bool measureClass(const Options& o, const std::string& name, const std::string& 
                         " edges shared by three or more triangles (of " +
                         std::to_string(closed.edges) + ")");
   }
-  std::vector<SymmetryTrial> trials;
-  entry->symmetry = detectSymmetry(mesh, SymmetryDetectionConfig{}, &trials);
+  const SymmetryDetection symmetry = detectSymmetry(mesh);
+  entry->symmetry = symmetry.symmetry;
   if (o.trials) {
-    for (const auto& t : trials) {
+    for (const auto& t : symmetry.trials) {
       std::printf("  %s: %7.2f deg about [%6.3f %6.3f %6.3f]: %6.2f mm (tolerance %.2f mm)%s\n",
                   name.c_str(), t.angle_deg, t.axis.x(), t.axis.y(), t.axis.z(),
                   1000 * t.distance_m, 1000 * t.tolerance_m, t.maps_onto_itself() ? " *" : "");
     }
+  }
+  if (symmetry.axis_offset_m > symmetry.tolerance_m) {
+    std::ostringstream why;
+    why.precision(1);
+    why << std::fixed << "its symmetry axes pass " << 1000 * symmetry.axis_offset_m
+        << " mm from the model origin (through the box centre [" << 1000 * symmetry.centre.x()
+        << ", " << 1000 * symmetry.centre.y() << ", " << 1000 * symmetry.centre.z()
+        << "] mm); GeoFusion applies symmetries about the origin: move the mesh's origin there "
+           "(and the detector's object frame with it) for them to hold exactly";
+    warnings->push_back(why.str());
   }
   entry->features = extractSurfaceFeatures(mesh);
   entry->notes = {name + ": " + millimetres(mesh.extents()) + ", " +
@@ -136,7 +146,7 @@ bool measureClass(const Options& o, const std::string& name, const std::string& 
         name + " (id " + std::to_string(id) + "), " + millimetres(mesh.extents()),
         "symmetry: " + describe(entry->symmetry), "features: " + describe(entry->features),
         "green: planes, yellow: normals, magenta: cylinder sides, red: edges, cyan: symmetry"};
-    if (!writeModelPreview(mesh, entry->features, entry->symmetry, caption,
+    if (!writeModelPreview(mesh, entry->features, entry->symmetry, symmetry.centre, caption,
                            o.previews + "/" + name + ".png", error))
       return false;
   }

@@ -60,13 +60,24 @@ struct SymmetryTrial {
   bool maps_onto_itself() const { return distance_m <= tolerance_m; }
 };
 
-/// The symmetries of the mesh about axes through the model origin (the model frame's axes and the
-/// principal axes of its surface): continuous about the first axis where every continuous angle
-/// passes; otherwise discrete with every rotation by a multiple of 360/n (largest passing order
-/// n) about each axis, plus 180 degrees about the others that pass. `trials`, when given,
-/// receives every rotation tried.
-Symmetry detectSymmetry(const TriangleMesh& mesh, const SymmetryDetectionConfig& config = {},
-                        std::vector<SymmetryTrial>* trials = nullptr);
+/// What detectSymmetry found and how.
+struct SymmetryDetection {
+  Symmetry symmetry;
+  /// The point the symmetry axes pass through: the centre of the bounding box, model frame.
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  /// How far the axes pass from the model origin, metres. GeoFusion applies symmetries about the
+  /// origin: beyond the tolerance, the mesh should be recentred (make_model_set warns).
+  double axis_offset_m = 0.0;
+  double tolerance_m = 0.0;
+  std::vector<SymmetryTrial> trials;  ///< every rotation tried
+};
+
+/// The mesh's symmetries about axes through the centre of its bounding box (directions: the
+/// model frame's axes and the well-defined principal axes of its surface): continuous about the
+/// first axis where every continuous angle passes; otherwise discrete with every rotation by a
+/// multiple of 360/n about each axis (n the largest order that passes).
+SymmetryDetection detectSymmetry(const TriangleMesh& mesh,
+                                 const SymmetryDetectionConfig& config = {});
 
 /// True when `a` and `b` are the same symmetry: the same continuous axis (either direction), or
 /// the same set of discrete rotations (within `angle_tolerance_deg`).

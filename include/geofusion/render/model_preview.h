@@ -11,10 +11,12 @@
 
 namespace geofusion {
 
-/// Writes the preview of `mesh` with `features` and `symmetry` as a PNG at `path`; `caption`
+/// Writes the preview of `mesh` with `features` and `symmetry` (its axes through
+/// `symmetry_centre`) as a PNG at `path`; `caption`
 /// lines are printed on it. False, with the reason, when it cannot render or write.
 bool writeModelPreview(const TriangleMesh& mesh, const SurfaceFeatures& features,
-                       const Symmetry& symmetry, const std::vector<std::string>& caption,
-                       const std::string& path, std::string* error);
+                       const Symmetry& symmetry, const Eigen::Vector3d& symmetry_centre,
+                       const std::vector<std::string>& caption, const std::string& path,
+                       std::string* error);
 
 }  // namespace geofusion
