@@ -4,6 +4,7 @@
 #include <pcl/point_types.h>
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -70,6 +71,21 @@ WatertightCheck checkWatertight(const TriangleMesh& mesh) {
 
 namespace {
 
+// Texture colours (RGB in [0, 1]) at texture coordinates (OBJ convention: v up).
+std::vector<Eigen::Vector3f> colours(const cv::Mat& texture,
+                                     const std::vector<Eigen::Vector2f>& uvs) {
+  std::vector<Eigen::Vector3f> out;
+  out.reserve(uvs.size());
+  for (const auto& uv : uvs) {
+    const float u = uv.x() - std::floor(uv.x()), v = uv.y() - std::floor(uv.y());
+    const int col = std::clamp(static_cast<int>(u * texture.cols), 0, texture.cols - 1);
+    const int row = std::clamp(static_cast<int>((1.f - v) * texture.rows), 0, texture.rows - 1);
+    const cv::Vec3b bgr = texture.at<cv::Vec3b>(row, col);
+    out.emplace_back(bgr[2] / 255.f, bgr[1] / 255.f, bgr[0] / 255.f);
+  }
+  return out;
+}
+
 // The mesh's surface as dense samples with normals, to measure how far a rotation moves sparse
 // samples off it.
 class SurfaceDistance {
@@ -77,12 +93,20 @@ class SurfaceDistance {
   SurfaceDistance(const TriangleMesh& mesh, const SymmetryDetectionConfig& config)
       : config_(config) {
     std::vector<Eigen::Vector3f> normals;
-    const auto dense = sampleSurfacePoints(mesh, 10 * config.samples, 7, &normals);
+    std::vector<Eigen::Vector2f> dense_uvs, query_uvs;
+    const auto dense = sampleSurfacePoints(mesh, 10 * config.samples, 7, &normals, &dense_uvs);
     cloud_.reset(new pcl::PointCloud<pcl::PointXYZ>);
     for (const auto& p : dense) cloud_->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
     normals_ = std::move(normals);
     tree_.setInputCloud(cloud_);
-    queries_ = sampleSurfacePoints(mesh, config.samples, 11);
+    queries_ = sampleSurfacePoints(mesh, config.samples, 11, nullptr, &query_uvs);
+    if (!mesh.texture_path.empty() && !dense_uvs.empty()) {
+      const cv::Mat texture = cv::imread(mesh.texture_path, cv::IMREAD_COLOR);
+      if (!texture.empty()) {
+        dense_colours_ = colours(texture, dense_uvs);
+        query_colours_ = colours(texture, query_uvs);
+      }
+    }
     const double diagonal = static_cast<double>(mesh.extents().norm());
     Eigen::Vector3f lo, hi;
     mesh.bounds(&lo, &hi);
@@ -92,13 +116,15 @@ class SurfaceDistance {
   }
 
   double tolerance() const { return tolerance_m_; }
+  bool textured() const { return !query_colours_.empty(); }
   const Eigen::Vector3f& centre() const { return centre_; }
   const std::vector<Eigen::Vector3f>& queries() const { return queries_; }
 
   // The configured quantile of the distances from the rotated samples to the surface: to the
   // tangent plane of the nearest dense sample when it is within a few sample spacings (no
   // sampling noise on smooth parts), else to the sample itself.
-  double after(const Eigen::Matrix3f& R) const {
+  double after(const Eigen::Matrix3f& R, double* colour_mismatch = nullptr) const {
+    std::size_t mismatched = 0;
     const Eigen::Vector3f shift = centre_ - R * centre_;
     std::vector<double> d;
     d.reserve(queries_.size());
@@ -115,7 +141,14 @@ class SurfaceDistance {
       const double plane = std::abs(static_cast<double>(
           normals_[static_cast<std::size_t>(index[0])].dot(x - Eigen::Vector3f(p.x, p.y, p.z))));
       d.push_back(point < 3.0 * spacing_m_ ? plane : point);
+      if (textured()) {
+        const Eigen::Vector3f diff =
+            query_colours_[d.size() - 1] - dense_colours_[static_cast<std::size_t>(index[0])];
+        if (diff.cwiseAbs().maxCoeff() > 0.2f) ++mismatched;
+      }
     }
+    if (colour_mismatch)
+      *colour_mismatch = textured() ? static_cast<double>(mismatched) / queries_.size() : 0.0;
     const std::size_t k =
         std::min(d.size() - 1, static_cast<std::size_t>(config_.quantile * (d.size() - 1)));
     std::nth_element(d.begin(), d.begin() + static_cast<long>(k), d.end());
@@ -130,6 +163,7 @@ class SurfaceDistance {
   std::vector<Eigen::Vector3f> queries_;
   double tolerance_m_ = 0.0;
   double spacing_m_ = 0.0;
+  std::vector<Eigen::Vector3f> dense_colours_, query_colours_;  // RGB in [0, 1]
   Eigen::Vector3f centre_ = Eigen::Vector3f::Zero();
 };
 
@@ -160,14 +194,18 @@ std::vector<Eigen::Vector3d> candidateAxes(const std::vector<Eigen::Vector3f>& p
   return axes;
 }
 
-SymmetryTrial trial(const SurfaceDistance& surface, const Eigen::Vector3d& axis, double angle_deg) {
+SymmetryTrial trial(const SurfaceDistance& surface, const Eigen::Vector3d& axis, double angle_deg,
+                    bool discrete, const SymmetryDetectionConfig& config) {
   SymmetryTrial t;
+  t.discrete = discrete;
+  t.max_colour_mismatch = config.max_colour_mismatch;
   t.axis = axis;
   t.angle_deg = angle_deg;
   t.tolerance_m = surface.tolerance();
   t.distance_m = surface.after(
       Eigen::AngleAxisf(static_cast<float>(angle_deg * M_PI / 180.0), axis.cast<float>())
-          .toRotationMatrix());
+          .toRotationMatrix(),
+      &t.colour_mismatch);
   return t;
 }
 
@@ -190,6 +228,7 @@ SymmetryDetection detectSymmetry(const TriangleMesh& mesh, const SymmetryDetecti
   const SurfaceDistance surface(mesh, config);
   out.centre = surface.centre().cast<double>();
   out.tolerance_m = surface.tolerance();
+  surface.after(Eigen::Matrix3f::Identity(), &out.colour_baseline);
   const auto tried = [&](const SymmetryTrial& t) {
     out.trials.push_back(t);
     return t.maps_onto_itself();
@@ -199,7 +238,7 @@ SymmetryDetection detectSymmetry(const TriangleMesh& mesh, const SymmetryDetecti
   for (const auto& axis : axes) {
     bool all = true;
     for (double angle : config.continuous_angles_deg)
-      all = tried(trial(surface, axis, angle)) && all;
+      all = tried(trial(surface, axis, angle, false, config)) && all;
     if (all) {
       out.symmetry.type = Symmetry::Type::kContinuous;
       out.symmetry.axis = axis;
@@ -213,7 +252,8 @@ SymmetryDetection detectSymmetry(const TriangleMesh& mesh, const SymmetryDetecti
   for (const auto& axis : axes) {
     for (int n = config.max_order; n >= 2; --n) {
       bool all = true;
-      for (int k = 1; k < n && all; ++k) all = tried(trial(surface, axis, 360.0 * k / n));
+      for (int k = 1; k < n && all; ++k)
+        all = tried(trial(surface, axis, 360.0 * k / n, true, config));
       if (!all) continue;
       for (int k = 1; k < n; ++k) {
         const Eigen::Quaterniond q(Eigen::AngleAxisd(2.0 * M_PI * k / n, axis));

@@ -10,6 +10,7 @@
 //       [--depth-encoding 16UC1|32FC1] [--no-compression] [--previews N] [--force]
 #include "command_line.h"
 #include "geofusion/evaluation/sequence_calibration.h"
+#include "geofusion/model/model_import.h"
 #include "geofusion/ros/recording_writer.h"
 #include "geofusion/simulation/dataset.h"
 #include "model_set_option.h"
@@ -200,6 +201,9 @@ int main(int argc, char** argv) {
   request << describeSuite(suite) << "; models " << models.name() << " (" << models.size()
           << " classes); detector " << opt.detector << "; depth " << opt.depth_encoding << "; lz4 "
           << opt.compress << "\n";
+  // The symmetries change the simulated detector's flips.
+  for (const auto& model : models.models())
+    request << "  " << model->name << " symmetry " << describe(model->symmetry) << "\n";
 
   std::cout << "generate_dataset: suite " << suite.name << " (" << suite.scenes.size()
             << " scenes, " << suite.keyframes << " keyframes each, images every "

@@ -120,10 +120,14 @@ bool measureClass(const Options& o, const std::string& name, const std::string& 
   const SymmetryDetection symmetry = detectSymmetry(mesh);
   entry->symmetry = symmetry.symmetry;
   if (o.trials) {
+    std::printf("  %s: colour mismatch without rotation %.3f\n", name.c_str(),
+                symmetry.colour_baseline);
     for (const auto& t : symmetry.trials) {
-      std::printf("  %s: %7.2f deg about [%6.3f %6.3f %6.3f]: %6.2f mm (tolerance %.2f mm)%s\n",
-                  name.c_str(), t.angle_deg, t.axis.x(), t.axis.y(), t.axis.z(),
-                  1000 * t.distance_m, 1000 * t.tolerance_m, t.maps_onto_itself() ? " *" : "");
+      std::printf(
+          "  %s: %7.2f deg about [%6.3f %6.3f %6.3f]: %6.2f mm (tolerance %.2f mm), colour "
+          "mismatch %.3f%s\n",
+          name.c_str(), t.angle_deg, t.axis.x(), t.axis.y(), t.axis.z(), 1000 * t.distance_m,
+          1000 * t.tolerance_m, t.colour_mismatch, t.maps_onto_itself() ? " *" : "");
     }
   }
   if (symmetry.axis_offset_m > symmetry.tolerance_m) {

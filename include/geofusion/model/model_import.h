@@ -49,6 +49,11 @@ struct SymmetryDetectionConfig {
   /// Angles (deg) that must all pass for a continuous symmetry (no discrete order up to
   /// max_order divides them all).
   std::vector<double> continuous_angles_deg{23.0, 67.0, 131.0, 157.0};
+  /// Textured meshes: a discrete rotation also has to keep the look, at most this share of the
+  /// rotated samples changing colour (a printed box's faces tell a detector which way it
+  /// lies). Continuous symmetries are geometric only: a label tells a rotation about a can's
+  /// axis only coarsely, and depth not at all.
+  double max_colour_mismatch = 0.15;
 };
 
 /// One rotation tried, with how far it moved the surface off itself.
@@ -57,7 +62,14 @@ struct SymmetryTrial {
   double angle_deg = 0.0;
   double distance_m = 0.0;  ///< the quantile distance
   double tolerance_m = 0.0;
-  bool maps_onto_itself() const { return distance_m <= tolerance_m; }
+  /// Textured meshes: share of the rotated samples whose colour differs (a channel by more than
+  /// 0.2) from the surface's nearest colour.
+  double colour_mismatch = 0.0;
+  bool discrete = false;  ///< tried as a discrete rotation: the colour counts
+  double max_colour_mismatch = 0.0;
+  bool maps_onto_itself() const {
+    return distance_m <= tolerance_m && (!discrete || colour_mismatch <= max_colour_mismatch);
+  }
 };
 
 /// What detectSymmetry found and how.
@@ -69,13 +81,16 @@ struct SymmetryDetection {
   /// origin: beyond the tolerance, the mesh should be recentred (make_model_set warns).
   double axis_offset_m = 0.0;
   double tolerance_m = 0.0;
+  /// Textured meshes: the colour mismatch without rotation (texture detail between samples).
+  double colour_baseline = 0.0;
   std::vector<SymmetryTrial> trials;  ///< every rotation tried
 };
 
 /// The mesh's symmetries about axes through the centre of its bounding box (directions: the
 /// model frame's axes and the well-defined principal axes of its surface): continuous about the
-/// first axis where every continuous angle passes; otherwise discrete with every rotation by a
-/// multiple of 360/n about each axis (n the largest order that passes).
+/// first axis where every continuous angle maps the surface onto itself; otherwise discrete with
+/// every rotation by a multiple of 360/n about each axis (n the largest order whose rotations map
+/// the surface, and on a textured mesh its colours, onto themselves).
 SymmetryDetection detectSymmetry(const TriangleMesh& mesh,
                                  const SymmetryDetectionConfig& config = {});
 
