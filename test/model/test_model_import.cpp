@@ -210,5 +210,50 @@ TEST(ModelImport, ToolWritesALoadableModelSet) {
   EXPECT_TRUE(fs::exists(dir + "/set.yaml"));
 }
 
+// make_model_set on millimetre copies of YCB-Video scans (vertices x 1000, texture and material
+// beside them): it warns, writes scale 0.001, and the symmetries are the declared ones.
+TEST(ModelImport, ToolRescalesMillimetreScans) {
+  if (!test::haveYcb()) GTEST_SKIP() << "YCB-Video models not found in " << test::ycbDir();
+  const std::string dir = testing::TempDir() + "/geofusion_make_model_set_mm";
+  fs::remove_all(dir);
+  const std::vector<std::string> names = {"036_wood_block", "061_foam_brick", "007_tuna_fish_can"};
+  for (const auto& name : names) {
+    const std::string from = test::ycbDir() + "/" + name, to = dir + "/meshes/" + name;
+    fs::create_directories(to);
+    fs::copy_file(from + "/textured.mtl", to + "/textured.mtl");
+    fs::copy_file(from + "/texture_map.jpg", to + "/texture_map.jpg");
+    std::ifstream in(from + "/textured.obj");
+    std::ofstream out(to + "/textured.obj");
+    std::string line;
+    while (std::getline(in, line)) {
+      if (line.rfind("v ", 0) == 0) {
+        std::istringstream v(line.substr(2));
+        double x, y, z;
+        v >> x >> y >> z;
+        out << "v " << 1000 * x << " " << 1000 * y << " " << 1000 * z << "\n";
+      } else {
+        out << line << "\n";
+      }
+    }
+  }
+  const std::string run = std::string(MAKE_MODEL_SET) + " --meshes " + dir + "/meshes --out " +
+                          dir + "/set.yaml > " + dir + "/log 2>&1";
+  ASSERT_EQ(std::system(run.c_str()), 0) << std::ifstream(dir + "/log").rdbuf();
+  std::stringstream log;
+  log << std::ifstream(dir + "/log").rdbuf();
+  ModelSet declared, made;
+  std::vector<std::string> errors;
+  ASSERT_TRUE(test::loadYcbModels(&declared, &errors));
+  ASSERT_TRUE(ModelSet::load(dir + "/set.yaml", dir + "/meshes", &made, &errors));
+  for (const auto& name : names) {
+    EXPECT_NE(log.str().find(name + ": largest extent"), std::string::npos) << log.str();
+    const ObjectModel* m = made.find(name);
+    ASSERT_NE(m, nullptr) << name;
+    EXPECT_NEAR(m->extents.maxCoeff(), declared.find(name)->extents.maxCoeff(), 1e-5) << name;
+    EXPECT_TRUE(sameSymmetry(m->symmetry, declared.find(name)->symmetry))
+        << name << ": " << describe(m->symmetry);
+  }
+}
+
 }  // namespace
 }  // namespace geofusion
