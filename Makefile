@@ -6,10 +6,11 @@
 #   make vo-bench                the visual odometry benchmark, report in results/vo/
 #   make test-asan               every test built with ASan + UBSan in its own workspace, run by ctest
 #   make fuzz [FUZZ_RUNS=N]      libFuzzer (clang 14) on the input parsers, 1000000 runs per target
-.PHONY: demo test test-asan fuzz data bench vo-bench deps build lint clean help
+#   make screenshots             README's rviz screenshots (docs/images) by the rviz_screenshots test
+.PHONY: demo test test-asan fuzz data bench vo-bench screenshots deps build lint clean help
 
 help:
-	@sed -n '2,8p' Makefile
+	@sed -n '2,9p' Makefile
 
 deps:
 	@bash scripts/install_deps.sh
@@ -37,6 +38,9 @@ bench: build
 
 vo-bench: build
 	@bash scripts/vo_bench.sh
+
+screenshots: build
+	@bash -c 'source scripts/env.sh && set +u && source "$$GEOFUSION_WS/devel/setup.bash" && GEOFUSION_SCREENSHOT_DIR=$(CURDIR)/docs/images /usr/bin/python3 test/ros/rviz_screenshots.py'
 
 lint:
 	@bash scripts/lint.sh

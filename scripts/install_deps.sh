@@ -15,7 +15,7 @@ PACKAGES=(
   ros-std-srvs libstd-srvs-dev python3-std-srvs libcv-bridge-dev libimage-transport-dev
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
   libroslib-dev librosbag-dev libtopic-tools-dev python3-rosbag librostest-dev python3-rostest libdiagnostic-updater-dev
-  python3-diagnostic-msgs rviz
+  python3-diagnostic-msgs rviz librviz-dev
   # the core's libraries
   libeigen3-dev libceres-dev libpcl-conversions-dev libopencv-dev libmrpt-poses-dev libfcl-dev
   liboctomap-dev libosmesa6-dev libmeshoptimizer-dev nlohmann-json3-dev libbullet-dev libassimp-dev libyaml-cpp-dev libgtest-dev

@@ -494,6 +494,9 @@ class Table {
          [](GeoFusionConfig& c) { return &c.node.publish_object_frames; });
     text("node.object_frame_prefix", "TF frame name of an object: this prefix, then its id",
          [](GeoFusionConfig& c) { return &c.node.object_frame_prefix; });
+    text("node.background_colour",
+         "the background's colour in rviz: a bluish grey, lighter with height, or plain grey",
+         [](GeoFusionConfig& c) { return &c.node.background_colour; }, {"height", "grey"});
   }
   void visionMsgs() {
     text("vision_msgs.class_map",

@@ -175,7 +175,32 @@ ObjectEstimate SceneEstimator::estimateOf(const Track& track) const {
   e.existence = 1.0 - e.false_positive;
   e.first_keyframe = track.first_keyframe;
   e.last_keyframe = track.last_keyframe;
+  e.confirmed = track.confirmed || !stages_.false_positive_removal;
+  e.covariance = poseSpread(track, e.T_map_obj);
   return e;
+}
+
+Eigen::Matrix<double, 6, 6> SceneEstimator::poseSpread(const Track& track,
+                                                       const Eigen::Isometry3d& T_map_obj) const {
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  const Symmetry& symmetry = track.model->symmetry;
+  int n = 0;
+  for (const Observation& o : track.observations) {
+    if (o.keyframe < 0 || o.keyframe >= static_cast<int>(T_map_cam_.size())) continue;
+    const Eigen::Isometry3d T = T_map_cam_[static_cast<std::size_t>(o.keyframe)] * o.T_cam_obj;
+    const Eigen::Matrix3d R = closestSymmetricEquivalent(symmetry, T_map_obj.linear(), T.linear());
+    Eigen::Matrix<double, 6, 1> d;
+    d.head<3>() = T.translation() - T_map_obj.translation();
+    const Eigen::AngleAxisd error(T_map_obj.linear().transpose() * R);
+    Eigen::Vector3d rotation = error.angle() * error.axis();  // object frame
+    if (symmetry.type == Symmetry::Type::kContinuous)
+      rotation -= rotation.dot(symmetry.axis) * symmetry.axis;
+    d.tail<3>() = T_map_obj.linear() * rotation;
+    covariance += d * d.transpose();
+    ++n;
+  }
+  if (n < 2) return Eigen::Matrix<double, 6, 6>::Zero();
+  return covariance / (static_cast<double>(n) * (n - 1));
 }
 
 std::vector<ObjectEstimate> SceneEstimator::objects() const {
@@ -191,6 +216,10 @@ KeyframeResult SceneEstimator::result(int keyframe, double stamp) const {
   r.stamp_s = stamp;
   if (!T_map_cam_.empty()) r.T_map_cam = T_map_cam_.back();
   r.objects = objects();
+  if (stages_.false_positive_removal && !stages_.map_is_keyframe_detections) {
+    for (const Track& track : tracks_)
+      if (!track.confirmed) r.tentative.push_back(estimateOf(track));
+  }
   if (stages_.relations_and_stage_two) r.contacts = onePerPairAndType(contacts_);
   return r;
 }

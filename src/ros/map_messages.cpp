@@ -43,43 +43,58 @@ bool contactPoints(const KeyframeResult& r, const FeatureContact& c, const Objec
 
 }  // namespace
 
+geofusion::MapObject toMapObjectMsg(const ObjectEstimate& o) {
+  geofusion::MapObject m;
+  m.id = messageId(o.id);
+  m.class_name = o.model->name;
+  m.class_id = o.model->id;
+  m.state =
+      o.confirmed ? geofusion::MapObject::STATE_CONFIRMED : geofusion::MapObject::STATE_TENTATIVE;
+  m.pose.pose = toPoseMsg(o.T_map_obj);
+  Eigen::Matrix<double, 6, 6> covariance = o.covariance;
+  if (o.model->symmetry.type == Symmetry::Type::kContinuous) {
+    // Rotation about the axis is unobservable: the variance of an angle uniform on the circle.
+    const Eigen::Vector3d axis = o.T_map_obj.linear() * o.model->symmetry.axis.normalized();
+    covariance.bottomRightCorner<3, 3>() += (M_PI * M_PI / 3.0) * axis * axis.transpose();
+  }
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j)
+      m.pose.covariance[static_cast<std::size_t>(6 * i + j)] = covariance(i, j);
+  m.existence_score = static_cast<float>(o.existence);
+  m.false_positive_score = static_cast<float>(o.false_positive);
+  m.num_measurements = static_cast<uint32_t>(o.measurements);
+  switch (o.model->symmetry.type) {
+    case Symmetry::Type::kContinuous:
+      m.symmetry = geofusion::MapObject::SYMMETRY_CONTINUOUS;
+      m.symmetry_axis.x = o.model->symmetry.axis.x();
+      m.symmetry_axis.y = o.model->symmetry.axis.y();
+      m.symmetry_axis.z = o.model->symmetry.axis.z();
+      break;
+    case Symmetry::Type::kDiscrete:
+      m.symmetry = geofusion::MapObject::SYMMETRY_DISCRETE;
+      for (const auto& q : o.model->symmetry.rotations) {
+        geometry_msgs::Quaternion mq;
+        mq.x = q.x(), mq.y = q.y(), mq.z = q.z(), mq.w = q.w();
+        m.symmetry_rotations.push_back(mq);
+      }
+      break;
+    default: m.symmetry = geofusion::MapObject::SYMMETRY_NONE;
+  }
+  m.bbox_size.x = o.model->extents.x();
+  m.bbox_size.y = o.model->extents.y();
+  m.bbox_size.z = o.model->extents.z();
+  return m;
+}
+
 geofusion::ObjectMap toObjectMapMsg(const KeyframeResult& r, const SupportPlane& plane,
                                     const Eigen::Vector3d& gravity,
                                     const std_msgs::Header& header) {
   geofusion::ObjectMap msg;
   msg.header = header;
-  for (const ObjectEstimate& o : r.objects) {
-    if (!o.model) continue;
-    geofusion::MapObject m;
-    m.id = messageId(o.id);
-    m.class_name = o.model->name;
-    m.class_id = o.model->id;
-    m.pose.pose = toPoseMsg(o.T_map_obj);
-    m.existence_score = static_cast<float>(o.existence);
-    m.false_positive_score = static_cast<float>(o.false_positive);
-    m.num_measurements = static_cast<uint32_t>(o.measurements);
-    switch (o.model->symmetry.type) {
-      case Symmetry::Type::kContinuous:
-        m.symmetry = geofusion::MapObject::SYMMETRY_CONTINUOUS;
-        m.symmetry_axis.x = o.model->symmetry.axis.x();
-        m.symmetry_axis.y = o.model->symmetry.axis.y();
-        m.symmetry_axis.z = o.model->symmetry.axis.z();
-        break;
-      case Symmetry::Type::kDiscrete:
-        m.symmetry = geofusion::MapObject::SYMMETRY_DISCRETE;
-        for (const auto& q : o.model->symmetry.rotations) {
-          geometry_msgs::Quaternion mq;
-          mq.x = q.x(), mq.y = q.y(), mq.z = q.z(), mq.w = q.w();
-          m.symmetry_rotations.push_back(mq);
-        }
-        break;
-      default: m.symmetry = geofusion::MapObject::SYMMETRY_NONE;
-    }
-    m.bbox_size.x = o.model->extents.x();
-    m.bbox_size.y = o.model->extents.y();
-    m.bbox_size.z = o.model->extents.z();
-    msg.objects.push_back(m);
-  }
+  for (const ObjectEstimate& o : r.objects)
+    if (o.model) msg.objects.push_back(toMapObjectMsg(o));
+  for (const ObjectEstimate& o : r.tentative)
+    if (o.model) msg.tentative.push_back(toMapObjectMsg(o));
   Eigen::Isometry3d T_plane = Eigen::Isometry3d::Identity();
   const auto plane_model = plane.valid ? supportPlaneModel(plane, &T_plane) : nullptr;
   for (const FeatureContact& c : r.contacts) {
@@ -125,62 +140,120 @@ geofusion::ObjectMap toObjectMapMsg(const KeyframeResult& r, const SupportPlane&
   return msg;
 }
 
+std::vector<int> labelLevels(const std::vector<Eigen::Vector3d>& positions, double min_spacing_m) {
+  std::vector<int> levels(positions.size(), 0);
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    for (int level = 0;; ++level) {
+      bool free = true;
+      for (std::size_t j = 0; j < i && free; ++j) {
+        free =
+            levels[j] != level || (positions[i] - positions[j]).head<2>().norm() >= min_spacing_m;
+      }
+      if (free) {
+        levels[i] = level;
+        break;
+      }
+    }
+  }
+  return levels;
+}
+
+std_msgs::ColorRGBA contactKindColour(ContactKind kind) {
+  switch (kind) {
+    case ContactKind::kSupport: return colorMsg(0.2f, 0.85f, 0.25f);  // green
+    case ContactKind::kLeaning: return colorMsg(1.0f, 0.55f, 0.0f);   // orange
+    case ContactKind::kSide: return colorMsg(0.25f, 0.55f, 1.0f);     // blue
+  }
+  return colorMsg(1.0f, 1.0f, 1.0f);
+}
+
+namespace {
+
+// The object as a mesh (its file) or, for built-in primitives, a centred box or cylinder.
+visualization_msgs::Marker objectMarker(const ObjectEstimate& o, const std_msgs::Header& header,
+                                        const char* ns) {
+  using visualization_msgs::Marker;
+  Marker m = makeMarker(header, ns, static_cast<int>(messageId(o.id)), Marker::CUBE);
+  m.pose = toPoseMsg(o.T_map_obj);
+  if (!o.model->mesh_path.empty()) {
+    m.type = Marker::MESH_RESOURCE;
+    m.mesh_resource = "file://" + o.model->mesh_path;
+    m.scale.x = m.scale.y = m.scale.z = 1.0;
+  } else {
+    m.type =
+        o.model->symmetry.type == Symmetry::Type::kContinuous ? Marker::CYLINDER : Marker::CUBE;
+    m.scale.x = o.model->extents.x();
+    m.scale.y = o.model->extents.y();
+    m.scale.z = o.model->extents.z();
+  }
+  return m;
+}
+
+// Labels above the objects, "id class" over "score state", raised a line where another label
+// below would overlap (clutter: objects closer than a label's width).
+void addLabels(const std::vector<const ObjectEstimate*>& objects, const std_msgs::Header& header,
+               visualization_msgs::MarkerArray* out) {
+  constexpr double kLine = 0.04, kSpacing = 0.18;
+  std::vector<Eigen::Vector3d> tops;
+  for (const ObjectEstimate* o : objects) {
+    Eigen::Vector3d top = o->T_map_obj.translation();
+    top.z() += 0.5 * o->model->extents.maxCoeff();
+    tops.push_back(top);
+  }
+  const std::vector<int> levels = labelLevels(tops, kSpacing);
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const ObjectEstimate& o = *objects[i];
+    auto label = makeMarker(header, kObjectLabelNs, static_cast<int>(messageId(o.id)),
+                            visualization_msgs::Marker::TEXT_VIEW_FACING);
+    label.pose.position = toPointMsg(tops[i] + Eigen::Vector3d(0, 0, 0.03 + kLine * levels[i]));
+    label.pose.orientation.w = 1.0;
+    label.scale.z = 0.015;
+    label.color = o.confirmed ? colorMsg(1.0f, 1.0f, 1.0f) : colorMsg(0.7f, 0.7f, 0.7f);
+    char text[160];
+    std::snprintf(text, sizeof(text), "%u %s\n%.2f %s", messageId(o.id), o.model->name.c_str(),
+                  o.existence, o.confirmed ? "confirmed" : "tentative");
+    label.text = text;
+    out->markers.push_back(label);
+  }
+}
+
+}  // namespace
+
 visualization_msgs::MarkerArray mapMarkers(const KeyframeResult& r, const SupportPlane& plane,
                                            const std_msgs::Header& header) {
   using visualization_msgs::Marker;
   visualization_msgs::MarkerArray out;
   out.markers.push_back(deleteAllMarker(header));
+  std::vector<const ObjectEstimate*> labelled;
   for (const ObjectEstimate& o : r.objects) {
     if (!o.model) continue;
     const Rgb colour = classColor(o.model->name);
-    Marker m = makeMarker(header, kObjectNs, static_cast<int>(messageId(o.id)), Marker::CUBE);
-    m.pose = toPoseMsg(o.T_map_obj);
+    Marker m = objectMarker(o, header, kObjectNs);
+    m.mesh_use_embedded_materials = m.type == Marker::MESH_RESOURCE;
     m.color.r = colour.r, m.color.g = colour.g, m.color.b = colour.b;
     m.color.a = static_cast<float>(0.4 + 0.5 * o.existence);
-    if (!o.model->mesh_path.empty()) {
-      m.type = Marker::MESH_RESOURCE;
-      m.mesh_resource = "file://" + o.model->mesh_path;
-      m.mesh_use_embedded_materials = true;
-      m.scale.x = m.scale.y = m.scale.z = 1.0;
-    } else {
-      // Built-in primitives are centred boxes and cylinders (along z).
-      m.type =
-          o.model->symmetry.type == Symmetry::Type::kContinuous ? Marker::CYLINDER : Marker::CUBE;
-      m.scale.x = o.model->extents.x();
-      m.scale.y = o.model->extents.y();
-      m.scale.z = o.model->extents.z();
-    }
     out.markers.push_back(m);
-    Marker label = m;
-    label.ns = kObjectLabelNs;
-    label.type = Marker::TEXT_VIEW_FACING;
-    label.mesh_resource.clear();
-    label.pose.orientation = geometry_msgs::Quaternion();
-    label.pose.orientation.w = 1.0;
-    label.pose.position.z += 0.5 * o.model->extents.maxCoeff() + 0.03;
-    label.scale.x = label.scale.y = 0.0;
-    label.scale.z = 0.025;
-    label.color.r = label.color.g = label.color.b = label.color.a = 1.0f;
-    char text[128];
-    std::snprintf(text, sizeof(text), "%d %s %.2f", m.id, o.model->name.c_str(), o.existence);
-    label.text = text;
-    out.markers.push_back(label);
+    labelled.push_back(&o);
   }
+  for (const ObjectEstimate& o : r.tentative) {
+    if (!o.model) continue;
+    Marker m = objectMarker(o, header, kTentativeNs);  // see-through grey: not (yet) in the map
+    m.color = colorMsg(0.75f, 0.75f, 0.75f, 0.25f);
+    out.markers.push_back(m);
+    labelled.push_back(&o);
+  }
+  addLabels(labelled, header, &out);
   Eigen::Isometry3d T_plane = Eigen::Isometry3d::Identity();
   const auto plane_model = plane.valid ? supportPlaneModel(plane, &T_plane) : nullptr;
   int contact_id = 0;
   Marker links = makeMarker(header, kContactLinkNs, 0, Marker::LINE_LIST);
   links.scale.x = 0.004;
+  Marker points = makeMarker(header, kContactPointNs, 0, Marker::SPHERE_LIST);
+  points.scale.x = points.scale.y = points.scale.z = 0.012;
   for (const FeatureContact& c : r.contacts) {
     Eigen::Vector3d a, b;
     if (!contactPoints(r, c, plane_model.get(), T_plane, &a, &b)) continue;
-    // P2P magenta, P2C green, C2C cyan, P2E orange.
-    const std_msgs::ColorRGBA colour =
-        c.type == ContactType::kPlaneEdge
-            ? colorMsg(1.0f, 0.55f, 0.0f)
-            : colorMsg(c.type == ContactType::kPlanePlane ? 1.0f : 0.1f,
-                       c.type == ContactType::kPlanePlane ? 0.1f : 1.0f,
-                       c.type == ContactType::kPlaneCurve ? 0.1f : 1.0f);
+    const std_msgs::ColorRGBA colour = contactKindColour(c.kind);
     Marker arrow = makeMarker(header, kContactNs, contact_id++, Marker::ARROW);
     // An arrow along the contact normal (the support direction for support contacts), ending
     // at the supported feature: it sits where the objects touch and points up into what rests.
@@ -188,20 +261,22 @@ visualization_msgs::MarkerArray mapMarkers(const KeyframeResult& r, const Suppor
     arrow.scale.x = 0.008, arrow.scale.y = 0.018, arrow.scale.z = 0.02;
     arrow.color = colour;
     out.markers.push_back(arrow);
-    // The link between the two objects' centres: which rests on which, at a glance.
-    // (contactPoints checked the indices; -1 is the support plane.)
+    points.points.push_back(toPointMsg(b));
+    points.colors.push_back(colour);
+    // The support graph: a line between the two objects' centres (the point under the object
+    // for the table). (contactPoints checked the indices; -1 is the support plane.)
     auto centre = [&](int index, const Eigen::Vector3d& on_plane) {
       return index < 0 ? on_plane
                        : Eigen::Vector3d(
                              r.objects[static_cast<std::size_t>(index)].T_map_obj.translation());
     };
-    const Eigen::Vector3d from = centre(c.object_a, b), to = centre(c.object_b, a);
-    links.points.push_back(toPointMsg(from));
-    links.points.push_back(toPointMsg(to));
+    links.points.push_back(toPointMsg(centre(c.object_a, b)));
+    links.points.push_back(toPointMsg(centre(c.object_b, a)));
     links.colors.push_back(colour);
     links.colors.push_back(colour);
   }
   if (!links.points.empty()) out.markers.push_back(links);
+  if (!points.points.empty()) out.markers.push_back(points);
   if (plane_model) {
     Marker table = makeMarker(header, kSupportPlaneNs, 0, Marker::CUBE);
     table.pose = toPoseMsg(T_plane);
@@ -216,7 +291,7 @@ visualization_msgs::MarkerArray mapMarkers(const KeyframeResult& r, const Suppor
 
 visualization_msgs::MarkerArray backgroundMarkers(const std::vector<Eigen::Vector3d>& centres,
                                                   double resolution_m,
-                                                  const std_msgs::Header& header) {
+                                                  const std_msgs::Header& header, bool by_height) {
   visualization_msgs::MarkerArray out;
   visualization_msgs::Marker m =
       makeMarker(header, "background", 0, visualization_msgs::Marker::CUBE_LIST);
@@ -227,7 +302,9 @@ visualization_msgs::MarkerArray backgroundMarkers(const std::vector<Eigen::Vecto
   for (const auto& c : centres) {
     m.points.push_back(toPointMsg(c));
     const double t = hi > lo ? (c.z() - lo) / (hi - lo) : 0.5;
-    const Rgb rgb = hsvToRgb(0.66 * (1.0 - t), 0.8, 0.9);  // blue low, red high
+    // Muted, so that the objects' class colours stand out: a bluish grey, darker low and lighter
+    // high, or plain grey.
+    const Rgb rgb = by_height ? hsvToRgb(0.6, 0.2, 0.4 + 0.35 * t) : hsvToRgb(0.0, 0.0, 0.55);
     m.colors.push_back(colorMsg(rgb.r, rgb.g, rgb.b));
   }
   out.markers.push_back(m);

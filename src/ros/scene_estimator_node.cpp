@@ -310,7 +310,8 @@ void SceneEstimatorNode::publishBackground(const std_msgs::Header& header) {
     if (background_octomap_pub_ && background_octomap_pub_.getNumSubscribers() > 0)
       octree = pipeline_->background()->binaryData();
   }
-  background_markers_pub_.publish(backgroundMarkers(centres, resolution, header));
+  background_markers_pub_.publish(
+      backgroundMarkers(centres, resolution, header, config_.node.background_colour == "height"));
   background_cloud_pub_.publish(pointCloud(centres, header));
 #ifdef GEOFUSION_HAVE_OCTOMAP_MSGS
   if (!octree.empty()) {

@@ -127,7 +127,8 @@ TEST(ModelSet, YcbVideoSetLoadsWithTheOfficialPoints) {
     EXPECT_FALSE(m->mesh.texture_path.empty()) << m->name;
   }
   EXPECT_EQ(set.find("024_bowl")->symmetry.type, Symmetry::Type::kContinuous);
-  EXPECT_EQ(set.find("061_foam_brick")->symmetry.rotations.size(), 5u);  // 4-fold about y, flips about x and z
+  EXPECT_EQ(set.find("061_foam_brick")->symmetry.rotations.size(),
+            5u);  // 4-fold about y, flips about x and z
 }
 
 // Distance from p to triangle abc (closest point, Ericson, Real-Time Collision Detection 5.1.5).

@@ -93,13 +93,36 @@ class EstimatorReplayTest(unittest.TestCase):
         for c in final.contacts:
             self.assertIn(c.object_a, ids)
             self.assertIn(c.object_b, ids)
-        # Markers: a DELETEALL first, one object marker and one label per object.
+        # Markers: a DELETEALL first, one object marker per object, one per tentative object,
+        # one label for each naming its id and state; one arrow and one touch point a contact,
+        # coloured by kind.
         last = markers[-1]
         self.assertEqual(last.markers[0].action, Marker.DELETEALL)
         self.assertEqual(len([m for m in last.markers if m.ns == 'objects']), len(final.objects))
-        self.assertEqual(len([m for m in last.markers if m.ns == 'labels']), len(final.objects))
-        self.assertEqual(len([m for m in last.markers if m.ns == 'contacts']),
-                         len(final.contacts))
+        self.assertEqual(len([m for m in last.markers if m.ns == 'tentative']),
+                         len(final.tentative))
+        labels = {m.id: m.text for m in last.markers if m.ns == 'labels'}
+        self.assertEqual(sorted(labels), sorted(o.id for o in final.objects + final.tentative))
+        for o in final.objects:
+            self.assertTrue(labels[o.id].startswith('%d %s\n' % (o.id, o.class_name)))
+            self.assertTrue(labels[o.id].endswith(' confirmed'), labels[o.id])
+        arrows = [m for m in last.markers if m.ns == 'contacts']
+        self.assertEqual(len(arrows), len(final.contacts))
+        kind_colour = {0: (0.2, 0.85, 0.25), 1: (1.0, 0.55, 0.0), 2: (0.25, 0.55, 1.0)}
+        for arrow, c in zip(arrows, final.contacts):
+            self.assertEqual(tuple(round(x, 2) for x in (arrow.color.r, arrow.color.g,
+                                                         arrow.color.b)),
+                             kind_colour[c.kind])
+        touches = [m for m in last.markers if m.ns == 'contact_points']
+        self.assertEqual(len(touches), 1 if final.contacts else 0)
+        if final.contacts:
+            self.assertEqual(len(touches[0].points), len(final.contacts))
+        # Objects measured more than once carry the spread of their measurements.
+        spread = [o for o in final.objects if o.num_measurements >= 2]
+        self.assertTrue(spread)
+        for o in spread:
+            self.assertGreater(o.pose.covariance[0] + o.pose.covariance[7] + o.pose.covariance[14],
+                               0.0, o.class_name)
         # ... and one line from supporter to supported object a contact, ending at an object.
         links = [m for m in last.markers if m.ns == 'contact_links']
         self.assertEqual(len(links), 1)

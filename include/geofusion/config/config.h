@@ -42,6 +42,8 @@ struct NodeConfig {
   /// every keyframe; a removed object's frame is no longer sent.
   bool publish_object_frames = true;
   std::string object_frame_prefix = "object_";
+  /// The background's colour in rviz: "height" (a bluish grey, lighter with height) or "grey".
+  std::string background_colour = "height";
 };
 
 /// Detections from vision_msgs/Detection3DArray (the adapter nodelet and run_offline): which

@@ -107,6 +107,13 @@ struct ObjectEstimate {
   double best_consistency = 0.0;  ///< R_j
   int measurements = 0;           ///< n_j
   int first_keyframe = -1, last_keyframe = -1;
+  /// Part of the map (false-positive score at most eps_fp); false for KeyframeResult::tentative.
+  bool confirmed = true;
+  /// How well the measurements pin the pose down: the covariance of their spread about the
+  /// estimate (map frame; x, y, z in m², then the rotation vector in rad²) over their number.
+  /// Rotation about a continuous symmetry axis is free and left at 0; zero below two
+  /// measurements.
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
 };
 
 struct StageTimings {
@@ -163,7 +170,9 @@ struct KeyframeResult {
   double stamp_s = 0.0;
   Eigen::Isometry3d T_map_cam = Eigen::Isometry3d::Identity();
   std::vector<ObjectEstimate> objects;  ///< the estimate after this keyframe
-  std::vector<int> removed_ids;         ///< objects removed or merged away at this keyframe
+  /// Objects seen but not (yet) confirmed: not part of the map, shown for inspection only.
+  std::vector<ObjectEstimate> tentative;
+  std::vector<int> removed_ids;  ///< objects removed or merged away at this keyframe
   /// Contacts among `objects` (indices into it; -1 = the support plane).
   std::vector<FeatureContact> contacts;
   std::vector<DetectionReport> detections;  ///< per input detection, in order
@@ -263,6 +272,8 @@ class SceneEstimator {
   Track& startTrack(const std::shared_ptr<const ObjectModel>& model,
                     const Eigen::Isometry3d& T_map_obj, int t);
   ObjectEstimate estimateOf(const Track& track) const;
+  Eigen::Matrix<double, 6, 6> poseSpread(const Track& track,
+                                         const Eigen::Isometry3d& T_map_obj) const;
   const Eigen::Isometry3d& reportedPose(const Track& track) const;
   /// Tracks in the map: confirmed ones (all for methods without false-positive removal).
   std::vector<std::size_t> reportedTracks() const;
