@@ -32,9 +32,9 @@ ALLOWED = {
 # for them.
 FOLDERS = [("include/geofusion/%s/" % m, m) for m in ALLOWED] + \
           [("src/%s/" % m, m) for m in ALLOWED] + \
-          [("src/nodes/", "ros")]
-ROS_FOLDERS = ("include/geofusion/ros/", "src/ros/", "src/nodes/", "src/tools/", "test/ros/",
-               "test/fuzz/")
+          [("src/nodes/", "ros"), ("src/rviz/", "ros")]
+ROS_FOLDERS = ("include/geofusion/ros/", "src/ros/", "src/nodes/", "src/rviz/", "src/tools/",
+               "test/ros/", "test/fuzz/")
 
 GEOFUSION_INCLUDE = re.compile(r'^\s*#\s*include\s*[<"]geofusion/([a-z_]+)/[^>"]+[>"]')
 ROS_INCLUDE = re.compile(
