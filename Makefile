@@ -7,10 +7,11 @@
 #   make test-asan               every test built with ASan + UBSan in its own workspace, run by ctest
 #   make fuzz [FUZZ_RUNS=N]      libFuzzer (clang 14) on the input parsers, 1000000 runs per target
 #   make screenshots             README's rviz screenshots (docs/images) by the rviz_screenshots test
-.PHONY: demo test test-asan fuzz data bench vo-bench screenshots deps build lint clean help
+#   make soak [SOAK_KEYFRAMES=N] a long run (tables revisited): time and memory per keyframe, plots
+.PHONY: demo test test-asan fuzz data bench vo-bench screenshots soak deps build lint clean help
 
 help:
-	@sed -n '2,9p' Makefile
+	@sed -n '2,10p' Makefile
 
 deps:
 	@bash scripts/install_deps.sh
@@ -38,6 +39,9 @@ bench: build
 
 vo-bench: build
 	@bash scripts/vo_bench.sh
+
+soak: build
+	@bash scripts/soak.sh
 
 screenshots: build
 	@bash -c 'source scripts/env.sh && set +u && source "$$GEOFUSION_WS/devel/setup.bash" && GEOFUSION_SCREENSHOT_DIR=$(CURDIR)/docs/images /usr/bin/python3 test/ros/rviz_screenshots.py'

@@ -326,6 +326,10 @@ class Table {
         "stage_one_every_n_keyframes");
     integer("stage_one.window_keyframes", 0, 100000, "latest N keyframe poses free (0: all)",
             [f](GeoFusionConfig& c) { return &f(c)->window_keyframes; });
+    flag("stage_one.marginalise_outside_window",
+         "older keyframes leave the problem, their measurements kept as object priors (cost "
+         "bounded by the window)",
+         [f](GeoFusionConfig& c) { return &f(c)->marginalise_outside_window; });
     flag("stage_one.adapt_noise",
          "GeoFusion: odometry and per-object measurement noise from the residuals of each solve",
          [f](GeoFusionConfig& c) { return &f(c)->adapt_noise; });

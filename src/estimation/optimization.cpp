@@ -179,8 +179,18 @@ StageOneSummary optimizeStageOne(std::vector<Eigen::Isometry3d>* T_map_cam,
     summary.status = SolveStatus::kBadInput;
     return summary;
   }
+  // The window: the latest window_keyframes cameras are free, the one before them anchors the
+  // gauge (the first camera when the run is shorter). Marginalising, the older cameras and their
+  // measurements leave the problem: each object they observed keeps a prior at its current pose
+  // with their summed information, so the cost depends on the window and not on the run.
+  const bool windowed =
+      config.window_keyframes > 0 && n_kf > static_cast<std::size_t>(config.window_keyframes);
+  const std::size_t anchor =
+      windowed ? n_kf - static_cast<std::size_t>(config.window_keyframes) - 1 : 0;
+  const bool marginalise = windowed && config.marginalise_outside_window;
+  const std::size_t first_cam = marginalise ? anchor : 0;
   std::vector<PoseBlock> cams(n_kf), objs(n_obj);
-  for (std::size_t i = 0; i < n_kf; ++i) cams[i].set((*T_map_cam)[i]);
+  for (std::size_t i = first_cam; i < n_kf; ++i) cams[i].set((*T_map_cam)[i]);
   for (std::size_t j = 0; j < n_obj; ++j) objs[j].set((*T_map_obj)[j]);
 
   ceres::Problem::Options problem_options;
@@ -188,16 +198,21 @@ StageOneSummary optimizeStageOne(std::vector<Eigen::Isometry3d>* T_map_cam,
   ceres::Problem problem(problem_options);
   PoseManifold manifold;
   auto add_pose = [&](PoseBlock& b) { problem.AddParameterBlock(b.data(), 7, &manifold); };
-  for (auto& c : cams) add_pose(c);
-  for (std::size_t i = 1; i < n_kf; ++i) {
+  for (std::size_t i = first_cam; i < n_kf; ++i) add_pose(cams[i]);
+  for (std::size_t i = first_cam + 1; i < n_kf; ++i) {
     auto* cost = new ceres::AutoDiffCostFunction<RelativePoseFactor, 6, 7, 7>(
         new RelativePoseFactor(odometryFactor(T_odom_cam[i - 1], T_odom_cam[i], config)));
     problem.AddResidualBlock(cost, makeLoss(config.odometry_loss), cams[i - 1].data(),
                              cams[i].data());
   }
   std::vector<char> used(n_obj, 0);
+  std::vector<double> past_weight(n_obj, 0.0);  // marginalised measurements' summed weights
   for (const StageOneMeasurement& m : measurements) {
     if (!validMeasurement(m, n_kf, n_obj) || !(m.weight > 0.0)) continue;
+    if (static_cast<std::size_t>(m.keyframe) < first_cam) {
+      past_weight[static_cast<std::size_t>(m.object)] += m.weight;
+      continue;
+    }
     PoseBlock &cam = cams[static_cast<std::size_t>(m.keyframe)],
               &obj = objs[static_cast<std::size_t>(m.object)];
     if (!used[static_cast<std::size_t>(m.object)]) {
@@ -210,12 +225,29 @@ StageOneSummary optimizeStageOne(std::vector<Eigen::Isometry3d>* T_map_cam,
                               config, std::sqrt(m.weight))));
     problem.AddResidualBlock(cost, makeLoss(config.measurement_loss), cam.data(), obj.data());
   }
-  // The first camera fixes the gauge; outside the window the cameras stay where they are.
-  const std::size_t first_free =
-      config.window_keyframes > 0 && n_kf > static_cast<std::size_t>(config.window_keyframes)
-          ? n_kf - static_cast<std::size_t>(config.window_keyframes)
-          : 1;
-  for (std::size_t i = 0; i < std::max<std::size_t>(1, first_free); ++i) {
+  // The marginalised past as priors on the objects the window still observes (an object seen
+  // only before the window keeps its pose: it is not in the problem).
+  PoseBlock identity;
+  identity.set(Eigen::Isometry3d::Identity());
+  bool uses_identity = false;
+  for (std::size_t j = 0; j < n_obj; ++j) {
+    if (!used[j] || !(past_weight[j] > 0.0)) continue;
+    if (!uses_identity) {
+      problem.AddParameterBlock(identity.data(), 7, &manifold);
+      problem.SetParameterBlockConstant(identity.data());
+      uses_identity = true;
+    }
+    Eigen::Vector3d axis;
+    const bool free = freeAxis(models[j], &axis);
+    const double s = std::sqrt(past_weight[j]);
+    auto* prior = new ceres::AutoDiffCostFunction<RelativePoseFactor, 6, 7, 7>(
+        new RelativePoseFactor((*T_map_obj)[j], s / config.measurement_sigma_position_m,
+                               s / config.measurement_sigma_rotation_rad, free, axis));
+    problem.AddResidualBlock(prior, nullptr, identity.data(), objs[j].data());
+  }
+  // The anchor fixes the gauge; outside the window the cameras stay where they are.
+  const std::size_t first_free = windowed ? anchor + 1 : 1;
+  for (std::size_t i = first_cam; i < first_free; ++i) {
     problem.SetParameterBlockConstant(cams[i].data());
   }
 
@@ -226,7 +258,8 @@ StageOneSummary optimizeStageOne(std::vector<Eigen::Isometry3d>* T_map_cam,
     if (!used[j]) continue;
     ordering->AddElementToGroup(objs[j].data(), 0);
   }
-  for (auto& c : cams) ordering->AddElementToGroup(c.data(), 1);
+  for (std::size_t i = first_cam; i < n_kf; ++i) ordering->AddElementToGroup(cams[i].data(), 1);
+  if (uses_identity) ordering->AddElementToGroup(identity.data(), 1);
   const ceres::Solver::Summary s =
       solveQuietly(&problem, ceres::DENSE_SCHUR, config.max_iterations, ordering);
   summary.status = statusOf(s);
@@ -236,7 +269,7 @@ StageOneSummary optimizeStageOne(std::vector<Eigen::Isometry3d>* T_map_cam,
   summary.final_cost = s.final_cost;
   summary.message = s.BriefReport();
   if (!summary.solved) return summary;
-  for (std::size_t i = 0; i < n_kf; ++i) (*T_map_cam)[i] = cams[i].get();
+  for (std::size_t i = first_cam; i < n_kf; ++i) (*T_map_cam)[i] = cams[i].get();
   for (std::size_t j = 0; j < n_obj; ++j)
     if (used[j]) (*T_map_obj)[j] = objs[j].get();
   return summary;

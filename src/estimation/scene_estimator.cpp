@@ -592,10 +592,29 @@ StageReport SceneEstimator::runStageOne() {
       optimizeStageOne(&T_map_cam_, T_odom_cam_, &objects, models, measurements, config);
   if (s.solved) {
     for (std::size_t i = 0; i < reported.size(); ++i) tracks_[reported[i]].T_stage_one = objects[i];
-    if (stages_.stage_one_noise_adaptation && config_.stage_one.adapt_noise)
+    if (stages_.stage_one_noise_adaptation && config_.stage_one.adapt_noise) {
+      if (config.marginalise_outside_window && config.window_keyframes > 0)
+        keepWindow(config.window_keyframes, &measurements, &sources);
       adaptNoise(reported, objects, models, measurements, sources);
+    }
   }
   return {s.status, s.iterations, s.initial_cost, s.final_cost};
+}
+
+// Only the measurements of the latest `window` keyframes and the one before them (a marginalised
+// stage I's problem), with their sources.
+void SceneEstimator::keepWindow(int window, std::vector<StageOneMeasurement>* measurements,
+                                std::vector<std::pair<std::size_t, std::size_t>>* sources) const {
+  const int first = static_cast<int>(T_map_cam_.size()) - window - 1;
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < measurements->size(); ++i) {
+    if ((*measurements)[i].keyframe < first) continue;
+    (*measurements)[kept] = (*measurements)[i];
+    (*sources)[kept] = (*sources)[i];
+    ++kept;
+  }
+  measurements->resize(kept);
+  sources->resize(kept);
 }
 
 // Variance component estimation from the residuals of the solve (under the configured noise):

@@ -52,6 +52,89 @@ TEST(StageOne, KnownAssociationsReducePoseError) {
   EXPECT_LT(axis, 0.05);
 }
 
+// Stage I run as the estimator runs it (every 10 keyframes, warm-started) over 200 keyframes
+// circling five objects, the last one measured in the first `frames_seeing_last_object` only;
+// returns the mean object translation error at the end.
+double incrementalStageOne(const StageOneConfig& config, int frames_seeing_last_object,
+                           std::vector<std::vector<Eigen::Isometry3d>>* history = nullptr,
+                           double* last_object_error = nullptr) {
+  std::mt19937 rng(11);
+  const ObjectModel box = boxModel(0.08, 0.05, 0.15);
+  const ObjectModel can = canModel(0.035, 0.1);
+  const std::vector<const ObjectModel*> models = {&box, &box, &can, &box, &can};
+  std::vector<Eigen::Isometry3d> truth;
+  for (int j = 0; j < 5; ++j)
+    truth.push_back(
+        at(0.1 * j - 0.2, 0.05 * (j % 2), 0.8, rot(20.0 * j, Eigen::Vector3d::UnitZ())));
+  const int n = 200;
+  std::vector<Eigen::Isometry3d> cams_true, odom;
+  Eigen::Isometry3d drift = Eigen::Isometry3d::Identity();
+  for (int t = 0; t < n; ++t) {
+    const double a = 2.0 * M_PI * t / 100.0;  // twice round
+    const Eigen::Vector3d eye(std::cos(a), std::sin(a), 1.3);
+    const Eigen::Vector3d z = (Eigen::Vector3d(0, 0, 0.8) - eye).normalized();
+    const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear().col(0) = x, T.linear().col(1) = z.cross(x), T.linear().col(2) = z;
+    T.translation() = eye;
+    cams_true.push_back(T);
+    if (t > 0) drift = drift * perturb(Eigen::Isometry3d::Identity(), 0.001, 0.0015, rng);
+    odom.push_back(drift * T);
+  }
+  std::vector<StageOneMeasurement> meas;
+  for (int t = 0; t < n; ++t) {
+    for (int j = 0; j < 5; ++j) {
+      if (j == 4 && t >= frames_seeing_last_object) continue;
+      meas.push_back({t, j, perturb(cams_true[t].inverse() * truth[j], 0.006, 0.05, rng), 1.0});
+    }
+  }
+  std::vector<Eigen::Isometry3d> cams, objects;
+  for (int j = 0; j < 5; ++j)
+    objects.push_back(odom[0] * meas[static_cast<std::size_t>(j)].T_cam_obj);
+  for (int upto = 10; upto <= n; upto += 10) {
+    while (static_cast<int>(cams.size()) < upto) {
+      const std::size_t t = cams.size();
+      cams.push_back(t == 0 ? odom[0] : cams.back() * (odom[t - 1].inverse() * odom[t]));
+    }
+    std::vector<StageOneMeasurement> seen;
+    for (const auto& m : meas)
+      if (m.keyframe < upto) seen.push_back(m);
+    const std::vector<Eigen::Isometry3d> odom_now(odom.begin(), odom.begin() + upto);
+    EXPECT_TRUE(optimizeStageOne(&cams, odom_now, &objects, models, seen, config).solved) << upto;
+    if (history) history->push_back(objects);
+  }
+  if (last_object_error)
+    *last_object_error = (objects[4].translation() - truth[4].translation()).norm();
+  double e = 0;
+  for (int j = 0; j < 5; ++j) e += (objects[j].translation() - truth[j].translation()).norm() / 5;
+  return e;
+}
+
+// Issue 22: marginalising the keyframes outside the window keeps the full solve's accuracy, and
+// an object the window no longer sees keeps its pose.
+TEST(StageOne, MarginalisedWindowMatchesTheFullSolve) {
+  StageOneConfig full, window;
+  full.window_keyframes = 0;
+  window.window_keyframes = 30;
+  window.marginalise_outside_window = true;
+  const double e_full = incrementalStageOne(full, 200);
+  const double e_window = incrementalStageOne(window, 200);
+  std::printf("object translation error: full %.2f mm, marginalised window %.2f mm\n",
+              1000 * e_full, 1000 * e_window);
+  EXPECT_LT(e_window, 1.25 * e_full + 0.0005);
+  EXPECT_LT(e_window, 0.004);
+
+  // Object 4 measured in the first 100 keyframes only: once the window (30 keyframes and its
+  // anchor) has passed its last measurement, the solves leave it where it was.
+  std::vector<std::vector<Eigen::Isometry3d>> history;
+  double last_error = 0.0;
+  incrementalStageOne(window, 100, &history, &last_error);
+  ASSERT_EQ(history.size(), 20u);
+  EXPECT_TRUE(history[13][4].isApprox(history[19][4], 1e-12));  // after keyframes 140 and 200
+  EXPECT_FALSE(history[13][0].isApprox(history[19][0], 1e-9));  // the others still move
+  EXPECT_LT(last_error, 0.005);
+}
+
 void stageOneCase(double meas_t, double meas_r, double odo_t, double odo_r, double* before_out,
                   double* after_out, double* axis_error) {
   std::mt19937 rng(7);

@@ -33,6 +33,12 @@ struct StageOneConfig {
   /// Only the latest N keyframe poses are free (older ones fixed, their measurements still
   /// constrain the objects); 0 = all. Bounds the time of a run on long sequences.
   int window_keyframes = 60;
+  /// Outside the window, marginalise instead of fixing: the older cameras and their measurements
+  /// leave the problem, each object the window observes gets a prior at its current pose with
+  /// their summed information, and the noise adaptation looks at the window only. Stage I's cost
+  /// then depends on the window and the objects in view, not on the length of the run (issue
+  /// 22; off until the benchmark shows the same accuracy as the full solve).
+  bool marginalise_outside_window = false;
   /// Noise adaptation (GeoFusion; variance component estimation from the residuals of each
   /// solve, used by the next): the odometry's variance scaled by a factor in
   /// [min_odometry_variance_factor, 1] (tighter only), each object's measurement variance by a

@@ -284,6 +284,8 @@ class SceneEstimator {
                                std::vector<int>* removed);
   bool stageOneDue(int t) const;
   StageReport runStageOne();
+  void keepWindow(int window, std::vector<StageOneMeasurement>* measurements,
+                  std::vector<std::pair<std::size_t, std::size_t>>* sources) const;
   void adaptNoise(const std::vector<std::size_t>& reported,
                   const std::vector<Eigen::Isometry3d>& objects,
                   const std::vector<const ObjectModel*>& models,
