@@ -302,16 +302,17 @@ void SceneEstimatorNode::publishBackground(const std_msgs::Header& header) {
   std::vector<Eigen::Vector3d> centres;
   double resolution = 0.0;
   std::string octree;  // binary serialisation, only with octomap_msgs
+  bool by_height = true;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!pipeline_->background()) return;
+    by_height = config_.node.background_colour == "height";
     centres = pipeline_->background()->occupiedCentres();
     resolution = pipeline_->background()->config().resolution_m;
     if (background_octomap_pub_ && background_octomap_pub_.getNumSubscribers() > 0)
       octree = pipeline_->background()->binaryData();
   }
-  background_markers_pub_.publish(
-      backgroundMarkers(centres, resolution, header, config_.node.background_colour == "height"));
+  background_markers_pub_.publish(backgroundMarkers(centres, resolution, header, by_height));
   background_cloud_pub_.publish(pointCloud(centres, header));
 #ifdef GEOFUSION_HAVE_OCTOMAP_MSGS
   if (!octree.empty()) {
