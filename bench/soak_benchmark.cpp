@@ -14,6 +14,7 @@
 #include "geofusion/config/config.h"
 #include "geofusion/estimation/scene_estimator.h"
 #include "geofusion/evaluation/evaluation.h"
+#include "geofusion/evaluation/trajectory_metrics.h"
 #include "geofusion/render/renderer.h"
 #include "geofusion/simulation/dataset.h"
 #include "model_set_option.h"
@@ -98,6 +99,31 @@ std::vector<RunFrame> makeRun(const Options& o, const SuiteSpec& suite,
   addOdometryDrift(&map_poses, suite.odometry, o.seed + 1000);
   for (std::size_t k = 0; k < run.size(); ++k) run[k].map_pose = map_poses[k];
   return run;
+}
+
+// The map's objects of one table brought onto the truth: a rigid alignment (Umeyama) of each
+// object to the nearest true object of its class within 20 cm, so that a table's map shifted by
+// the drift of the drive there is scored on its own shape (the world-frame score shows the
+// drift).
+std::vector<ObjectEstimate> alignedToTruth(const std::vector<ObjectEstimate>& near,
+                                           const ClutterScene& placed) {
+  std::vector<Eigen::Vector3d> est, truth;
+  for (const auto& e : near) {
+    double best = 0.2;
+    const SceneObject* match = nullptr;
+    for (const auto& t : placed.objects) {
+      const double d = (t.T_world_obj.translation() - e.T_map_obj.translation()).norm();
+      if (t.model->name == e.model->name && d < best) best = d, match = &t;
+    }
+    if (!match) continue;
+    est.push_back(e.T_map_obj.translation());
+    truth.push_back(match->T_world_obj.translation());
+  }
+  double rmse = 0.0;
+  const Eigen::Isometry3d T_true_est = alignTrajectories(est, truth, &rmse);
+  std::vector<ObjectEstimate> out = near;
+  for (auto& e : out) e.T_map_obj = T_true_est * e.T_map_obj;
+  return out;
 }
 
 // p95 of the total time over keyframes [from, to).
@@ -227,9 +253,13 @@ int main(int argc, char** argv) {
       if ((e.T_map_obj.translation() - tablePlacement(t).translation()).head<2>().norm() < 1.5)
         near.push_back(e);
     const MapScore s = scoreMap(placed, near);
-    std::printf("  table %d: %zu true objects; map %d there, %d true, %d false, ADD-S %.1f mm\n", t,
-                placed.objects.size(), s.objects, s.true_positives, s.false_positives,
-                1000 * s.mean_adds_m);
+    const MapScore aligned = scoreMap(placed, alignedToTruth(near, placed));
+    std::printf(
+        "  table %d: %zu true objects; map %d there: in the world frame %d true, %d false, ADD-S "
+        "%.1f mm; the table aligned %d true, %d false, ADD-S %.1f mm\n",
+        t, placed.objects.size(), s.objects, s.true_positives, s.false_positives,
+        1000 * s.mean_adds_m, aligned.true_positives, aligned.false_positives,
+        1000 * aligned.mean_adds_m);
   }
   const std::size_t n = total_ms.size();
   const std::size_t early_from = std::min<std::size_t>(100, n),
