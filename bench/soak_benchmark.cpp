@@ -10,6 +10,7 @@
 // DIR holds the YCB-Video models (default ../shared/data/ycb_video beside the source tree);
 // without them the built-in primitives are used and the output says so.
 #include "command_line.h"
+#include "config_option.h"
 #include "geofusion/common/statistics.h"
 #include "geofusion/config/config.h"
 #include "geofusion/estimation/scene_estimator.h"
@@ -34,8 +35,8 @@ namespace {
 using namespace geofusion;
 
 struct Options {
-  std::string out, models_dir = defaultYcbDir(), params;
-  std::vector<std::pair<std::string, std::string>> overrides;
+  std::string out, models_dir = defaultYcbDir();
+  ConfigOptions config;  ///< --params, --set
   int keyframes = 2000, tables = 3, visit = 100, objects = 20;
   unsigned seed = 7;
 };
@@ -148,12 +149,7 @@ int main(int argc, char** argv) {
     args.value("--objects", &o.objects);
     args.value("--seed", &o.seed);
     args.value("--models", &o.models_dir);
-    args.value("--params", &o.params);
-    args.custom("--set", [&o](const std::string& v) {
-      const auto eq = v.find('=');
-      if (eq == std::string::npos) throw std::runtime_error("--set expects KEY=VALUE, got " + v);
-      o.overrides.emplace_back(v.substr(0, eq), v.substr(eq + 1));
-    });
+    o.config.declare(&args);
     args.parse(argc, argv, usage);
     if (o.out.empty()) throw std::runtime_error("--out needed");
     if (o.keyframes < 1 || o.tables < 1 || o.visit < 1 || o.objects < 1)
@@ -164,18 +160,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   GeoFusionConfig config;
-  ConfigReport report;
-  if (!o.params.empty() && !loadConfigFile(o.params, &config, &report)) {
-    for (const auto& e : report.errors) std::cerr << "soak_benchmark: " << e << "\n";
-    return 2;
-  }
-  for (const auto& [key, value] : o.overrides) {
-    std::string error;
-    if (!setConfigValue(key, value, &config, &error)) {
-      std::cerr << "soak_benchmark: --set " << key << ": " << error << "\n";
-      return 2;
-    }
-  }
+  if (!o.config.apply("soak_benchmark", &config)) return 2;
   std::ofstream csv(o.out);
   if (!csv) {
     std::cerr << "soak_benchmark: cannot write " << o.out << "\n";

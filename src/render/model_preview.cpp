@@ -14,22 +14,10 @@ namespace {
 
 constexpr int kViewSize = 480;
 
-// A camera on the diagonal `direction` from the model's centre, looking at it, far enough to
-// see the whole model.
+// The camera on the diagonal `direction` from the model's centre, looking at it (T_cam_model).
 Eigen::Isometry3d cameraLookingAt(const Eigen::Vector3d& centre, const Eigen::Vector3d& direction,
                                   double distance) {
-  const Eigen::Vector3d eye = centre + distance * direction.normalized();
-  const Eigen::Vector3d z = (centre - eye).normalized();
-  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
-  if (std::abs(z.dot(up)) > 0.95) up = Eigen::Vector3d::UnitY();
-  const Eigen::Vector3d x = z.cross(up).normalized();  // optical x right, y down
-  const Eigen::Vector3d y = z.cross(x);
-  Eigen::Matrix3d R_model_cam;
-  R_model_cam << x, y, z;
-  Eigen::Isometry3d T_model_cam = Eigen::Isometry3d::Identity();
-  T_model_cam.linear() = R_model_cam;
-  T_model_cam.translation() = eye;
-  return T_model_cam.inverse();  // T_cam_model
+  return lookAt(centre + distance * direction.normalized(), centre).inverse();
 }
 
 class View {

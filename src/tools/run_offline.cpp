@@ -17,6 +17,7 @@
 // --keyframe-every = keyframes.every_n_frames) in the order given; it is written into the
 // results.
 #include "command_line.h"
+#include "config_option.h"
 #include "geofusion/common/robot_names.h"
 #include "geofusion/config/config.h"
 #include "geofusion/estimation/run_results.h"
@@ -56,9 +57,7 @@ namespace {
 
 struct Options {
   std::string bag, out;
-  std::string params;  ///< the configuration file
-  /// (key, value) overrides in the order given: --set and the shorthands.
-  std::vector<std::pair<std::string, std::string>> overrides;
+  geofusion::ConfigOptions config;  ///< --params, --set and the shorthands
   bool print_params = false;
   std::string rgb_topic = std::string("/") + geofusion::kRgbTopic;
   std::string depth_topic = std::string("/") + geofusion::kDepthTopic;
@@ -87,19 +86,11 @@ Options parse(int argc, char** argv) {
   geofusion::CommandLine args;
   args.value("--bag", &o.bag);
   args.value("--out", &o.out);
-  args.value("--params", &o.params);
-  auto shorthand = [&](const std::string& flag, const std::string& key) {
-    args.custom(flag, [&o, key](const std::string& v) { o.overrides.emplace_back(key, v); });
-  };
-  shorthand("--method", "method");
-  shorthand("--model-set", "model_set.name");
-  shorthand("--models", "model_set.dir");
-  shorthand("--keyframe-every", "keyframes.every_n_frames");
-  args.custom("--set", [&o](const std::string& v) {
-    const std::size_t eq = v.find('=');
-    if (eq == std::string::npos) throw std::runtime_error("--set expects KEY=VALUE, got " + v);
-    o.overrides.emplace_back(v.substr(0, eq), v.substr(eq + 1));
-  });
+  o.config.declare(&args);
+  o.config.shorthand(&args, "--method", "method");
+  o.config.shorthand(&args, "--model-set", "model_set.name");
+  o.config.shorthand(&args, "--models", "model_set.dir");
+  o.config.shorthand(&args, "--keyframe-every", "keyframes.every_n_frames");
   args.toggle("--print-params", &o.print_params);
   args.value("--rgb-topic", &o.rgb_topic);
   args.value("--depth-topic", &o.depth_topic);
@@ -114,20 +105,6 @@ Options parse(int argc, char** argv) {
   if (!o.print_params && (o.bag.empty() || o.out.empty()))
     throw std::runtime_error("--bag and --out are required");
   return o;
-}
-
-// The configuration of the options: the file, then the overrides; every problem on stderr.
-bool configure(const Options& o, geofusion::GeoFusionConfig* config) {
-  geofusion::ConfigReport report;
-  if (!o.params.empty()) geofusion::loadConfigFile(o.params, config, &report);
-  for (const auto& [key, value] : o.overrides) {
-    std::string error;
-    if (!geofusion::setConfigValue(key, value, config, &error))
-      report.errors.push_back("command line: " + error);
-  }
-  for (const std::string& w : report.warnings) std::cerr << "run_offline: warning: " << w << "\n";
-  for (const std::string& e : report.errors) std::cerr << "run_offline: " << e << "\n";
-  return report.ok();
 }
 
 // Whether `path` can be written: a probe file beside it is made and removed (before hours of
@@ -250,7 +227,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   GeoFusionConfig config;
-  if (!configure(opt, &config)) return 2;
+  if (!opt.config.apply("run_offline", &config)) return 2;
   if (opt.print_params) {
     std::cout << configYaml(config);
     return 0;

@@ -71,12 +71,8 @@ double incrementalStageOne(const StageOneConfig& config, int frames_seeing_last_
   Eigen::Isometry3d drift = Eigen::Isometry3d::Identity();
   for (int t = 0; t < n; ++t) {
     const double a = 2.0 * M_PI * t / 100.0;  // twice round
-    const Eigen::Vector3d eye(std::cos(a), std::sin(a), 1.3);
-    const Eigen::Vector3d z = (Eigen::Vector3d(0, 0, 0.8) - eye).normalized();
-    const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
-    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-    T.linear().col(0) = x, T.linear().col(1) = z.cross(x), T.linear().col(2) = z;
-    T.translation() = eye;
+    const Eigen::Isometry3d T =
+        lookAt(Eigen::Vector3d(std::cos(a), std::sin(a), 1.3), Eigen::Vector3d(0, 0, 0.8));
     cams_true.push_back(T);
     if (t > 0) drift = drift * perturb(Eigen::Isometry3d::Identity(), 0.001, 0.0015, rng);
     odom.push_back(drift * T);

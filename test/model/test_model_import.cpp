@@ -27,6 +27,14 @@ Symmetry rotations(std::vector<std::pair<Eigen::Vector3d, double>> axis_angles_d
   return s;
 }
 
+// The mesh as a plain OBJ (vertices and triangles).
+void writeObj(const TriangleMesh& mesh, const std::string& path) {
+  std::ofstream obj(path);
+  for (const auto& v : mesh.vertices) obj << "v " << v.x() << " " << v.y() << " " << v.z() << "\n";
+  for (const auto& t : mesh.triangles)
+    obj << "f " << t[0] + 1 << " " << t[1] + 1 << " " << t[2] + 1 << "\n";
+}
+
 TEST(ModelImport, UnitsAreReadFromTheSize) {
   TriangleMesh box = makeBox({0.2, 0.1, 0.05});
   UnitsCheck units = checkUnits(box);
@@ -114,14 +122,7 @@ TEST(ModelImport, WrittenYamlReadsBack) {
   box.symmetry = rotations({{Eigen::Vector3d::UnitZ(), 90}, {Eigen::Vector3d::UnitX(), 180}});
   box.features = extractSurfaceFeatures(makeBox({0.06, 0.06, 0.2}));
   box.notes = {"a note"};
-  {  // the box in millimetres, as an OBJ
-    TriangleMesh mesh = makeBox({60, 60, 200});
-    std::ofstream obj(dir + "/box.obj");
-    for (const auto& v : mesh.vertices)
-      obj << "v " << v.x() << " " << v.y() << " " << v.z() << "\n";
-    for (const auto& t : mesh.triangles)
-      obj << "f " << t[0] + 1 << " " << t[1] + 1 << " " << t[2] + 1 << "\n";
-  }
+  writeObj(makeBox({60, 60, 200}), dir + "/box.obj");  // the box in millimetres
   std::ofstream(dir + "/set.yaml") << modelSetYaml("mine", {box});
   ModelSet set;
   std::vector<std::string> errors;
@@ -166,13 +167,6 @@ TEST(ModelImport, ToolWritesALoadableModelSet) {
   const std::string dir = testing::TempDir() + "/geofusion_make_model_set";
   fs::remove_all(dir);
   fs::create_directories(dir + "/meshes/can");
-  const auto writeObj = [](const TriangleMesh& mesh, const std::string& path) {
-    std::ofstream obj(path);
-    for (const auto& v : mesh.vertices)
-      obj << "v " << v.x() << " " << v.y() << " " << v.z() << "\n";
-    for (const auto& t : mesh.triangles)
-      obj << "f " << t[0] + 1 << " " << t[1] + 1 << " " << t[2] + 1 << "\n";
-  };
   writeObj(makeBox({60, 60, 200}), dir + "/meshes/block_mm.obj");
   writeObj(makeCylinder(0.03, 0.1), dir + "/meshes/can/can.obj");
   const std::string tool = MAKE_MODEL_SET;
