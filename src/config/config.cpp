@@ -418,6 +418,10 @@ class Table {
          [f](GeoFusionConfig& c) { return &f(c)->contact_loss; });
     integer("stage_two.max_iterations", 1, 1000, "Ceres iterations",
             [f](GeoFusionConfig& c) { return &f(c)->max_iterations; });
+    integer("stage_two.local_map_keyframes", 0, 100000,
+            "relations, stage II and merging over the objects seen in the latest N keyframes "
+            "and their contact partners (0: all objects)",
+            [f](GeoFusionConfig& c) { return &f(c)->local_map_keyframes; });
     flag("stage_two.leaning_contacts", "leaning contacts join stage II (beside the supports)",
          [f](GeoFusionConfig& c) { return &f(c)->leaning_contacts; });
     flag("stage_two.side_contacts", "side-by-side contacts join stage II (beside the supports)",

@@ -98,6 +98,15 @@ bool validMeasurement(const StageOneMeasurement& m, std::size_t n_kf, std::size_
          m.object < static_cast<int>(n_obj);
 }
 
+// Square-root information of a measurement's translation in its camera frame (weight 1).
+Eigen::Matrix3d measurementSqrtInformation(const StageOneMeasurement& m,
+                                           const StageOneConfig& config) {
+  if (m.ray_sigma_m > 0)
+    return rayAlignedSqrtInformation(m.T_cam_obj.translation(), m.ray_sigma_m,
+                                     config.measurement_sigma_position_m);
+  return Eigen::Matrix3d::Identity() / config.measurement_sigma_position_m;
+}
+
 // The object measurement factor of m between the camera and object poses given (a discrete
 // symmetry's equivalent closest to them; a continuous axis left free; a refined measurement tight
 // along its ray), its weights scaled by `s`.
@@ -111,12 +120,8 @@ RelativePoseFactor measurementFactor(const StageOneMeasurement& m, const Eigen::
   }
   Eigen::Vector3d axis;
   const bool free = freeAxis(model, &axis);
-  const Eigen::Matrix3d W_p =
-      m.ray_sigma_m > 0
-          ? rayAlignedSqrtInformation(z.translation(), m.ray_sigma_m,
-                                      config.measurement_sigma_position_m)
-          : Eigen::Matrix3d(Eigen::Matrix3d::Identity() / config.measurement_sigma_position_m);
-  return RelativePoseFactor(z, s * W_p, s / config.measurement_sigma_rotation_rad, free, axis);
+  return RelativePoseFactor(z, s * measurementSqrtInformation(m, config),
+                            s / config.measurement_sigma_rotation_rad, free, axis);
 }
 
 RelativePoseFactor odometryFactor(const Eigen::Isometry3d& T_odom_a,
@@ -139,15 +144,86 @@ double squaredResidual(const RelativePoseFactor& f, const Eigen::Isometry3d& a,
 
 }  // namespace
 
+Eigen::Matrix3d alignToReference(const Symmetry& symmetry, const Eigen::Matrix3d& R_reference,
+                                 const Eigen::Matrix3d& R_measured) {
+  if (symmetry.type != Symmetry::Type::kContinuous)
+    return closestSymmetricEquivalent(symmetry, R_reference, R_measured);
+  // The rotation R(a, theta) about the axis closest to E = R_measured^T R_reference maximises
+  // trace(R^T E) = cos(theta) (tr E - a'Ea) + sin(theta) a . vee(E - E') + a'Ea.
+  const Eigen::Vector3d a = symmetry.axis.normalized();
+  const Eigen::Matrix3d E = R_measured.transpose() * R_reference;
+  const Eigen::Vector3d vee(E(2, 1) - E(1, 2), E(0, 2) - E(2, 0), E(1, 0) - E(0, 1));
+  const double theta = std::atan2(a.dot(vee), E.trace() - a.dot(E * a));
+  return R_measured * Eigen::AngleAxisd(theta, a).toRotationMatrix();
+}
+
+void FoldedMeasurements::add(const Eigen::Isometry3d& T_map_cam, const StageOneMeasurement& m,
+                             const ObjectModel* model, const Eigen::Matrix3d& R_reference,
+                             const StageOneConfig& config) {
+  ++count_;
+  if (!(m.weight > 0.0)) return;
+  const Eigen::Isometry3d T_map_meas = T_map_cam * m.T_cam_obj;
+  // Translation: W (R_cam' (t - t_cam) - z) = W R_cam' (t - t_meas), information
+  // w R_cam W'W R_cam' about t_meas.
+  const Eigen::Matrix3d W = measurementSqrtInformation(m, config) * T_map_cam.linear().transpose();
+  const Eigen::Matrix3d information = m.weight * W.transpose() * W;
+  translation_information_ += information;
+  information_vector_ += information * T_map_meas.translation();
+  const Eigen::Matrix3d R =
+      model ? alignToReference(model->symmetry, R_reference, T_map_meas.linear())
+            : T_map_meas.linear();
+  const double w_rotation =
+      m.weight / (config.measurement_sigma_rotation_rad * config.measurement_sigma_rotation_rad);
+  rotation_sum_ += w_rotation * R;
+  rotation_information_ += w_rotation;
+}
+
+Eigen::Isometry3d FoldedMeasurements::mean() const {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  if (empty()) return T;
+  // Chordal mean: the rotation nearest the weighted sum (SVD projection onto SO(3)).
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(rotation_sum_,
+                                              Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+  D(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1.0 : 1.0;
+  T.linear() = svd.matrixU() * D * svd.matrixV().transpose();
+  T.translation() = translation_information_.ldlt().solve(information_vector_);
+  return T;
+}
+
+Eigen::Matrix3d FoldedMeasurements::translationSqrtInformation() const {
+  // W'W = information with W = L' (Cholesky L L').
+  return Eigen::LLT<Eigen::Matrix3d>(translation_information_).matrixU();
+}
+
+double FoldedMeasurements::rotationWeight() const {
+  return std::sqrt(rotation_information_);
+}
+
+Eigen::Matrix<double, 6, 6> FoldedMeasurements::covariance() const {
+  Eigen::Matrix<double, 6, 6> c = Eigen::Matrix<double, 6, 6>::Zero();
+  if (empty()) return c;
+  c.topLeftCorner<3, 3>() = translation_information_.inverse();
+  c.bottomRightCorner<3, 3>() = Eigen::Matrix3d::Identity() / rotation_information_;
+  return c;
+}
+
+std::size_t firstKeyframeInProblem(std::size_t n_keyframes, const StageOneConfig& config) {
+  const bool windowed = config.window_keyframes > 0 &&
+                        n_keyframes > static_cast<std::size_t>(config.window_keyframes);
+  if (!windowed || !config.marginalise_outside_window) return 0;
+  return n_keyframes - static_cast<std::size_t>(config.window_keyframes) - 1;
+}
+
 StageOneResiduals stageOneResiduals(const std::vector<Eigen::Isometry3d>& T_map_cam,
                                     const std::vector<Eigen::Isometry3d>& T_odom_cam,
                                     const std::vector<Eigen::Isometry3d>& T_map_obj,
                                     const std::vector<const ObjectModel*>& models,
                                     const std::vector<StageOneMeasurement>& measurements,
-                                    const StageOneConfig& config) {
+                                    const StageOneConfig& config, std::size_t first_keyframe) {
   StageOneResiduals out;
   const std::size_t n_kf = std::min(T_map_cam.size(), T_odom_cam.size());
-  for (std::size_t i = 1; i < n_kf; ++i) {
+  for (std::size_t i = first_keyframe + 1; i < n_kf; ++i) {
     out.odometry.push_back(squaredResidual(odometryFactor(T_odom_cam[i - 1], T_odom_cam[i], config),
                                            T_map_cam[i - 1], T_map_cam[i]));
   }
@@ -171,24 +247,37 @@ StageOneSummary optimizeStageOne(std::vector<Eigen::Isometry3d>* T_map_cam,
                                  std::vector<Eigen::Isometry3d>* T_map_obj,
                                  const std::vector<const ObjectModel*>& models,
                                  const std::vector<StageOneMeasurement>& measurements,
-                                 const StageOneConfig& config) {
+                                 const StageOneConfig& config,
+                                 const std::vector<FoldedMeasurements>* folded) {
   StageOneSummary summary;
   const std::size_t n_kf = T_map_cam->size(), n_obj = T_map_obj->size();
-  if (n_kf == 0 || T_odom_cam.size() != n_kf || models.size() != n_obj) {
+  if (n_kf == 0 || T_odom_cam.size() != n_kf || models.size() != n_obj ||
+      (folded && folded->size() != n_obj)) {
     summary.message = "inconsistent sizes";
     summary.status = SolveStatus::kBadInput;
     return summary;
   }
   // The window: the latest window_keyframes cameras are free, the one before them anchors the
-  // gauge (the first camera when the run is shorter). Marginalising, the older cameras and their
-  // measurements leave the problem: each object they observed keeps a prior at its current pose
-  // with their summed information, so the cost depends on the window and not on the run.
+  // gauge (the first camera when the run is shorter). Marginalising, the older cameras leave the
+  // problem and their measurements come as one folded prior per object, so the cost depends on
+  // the window and not on the run.
   const bool windowed =
       config.window_keyframes > 0 && n_kf > static_cast<std::size_t>(config.window_keyframes);
   const std::size_t anchor =
       windowed ? n_kf - static_cast<std::size_t>(config.window_keyframes) - 1 : 0;
-  const bool marginalise = windowed && config.marginalise_outside_window;
-  const std::size_t first_cam = marginalise ? anchor : 0;
+  const std::size_t first_cam = firstKeyframeInProblem(n_kf, config);
+  std::vector<FoldedMeasurements> folded_here;
+  if (first_cam > 0 && !folded) {
+    folded_here.resize(n_obj);
+    for (const StageOneMeasurement& m : measurements) {
+      if (!validMeasurement(m, n_kf, n_obj) || static_cast<std::size_t>(m.keyframe) >= first_cam)
+        continue;
+      const std::size_t j = static_cast<std::size_t>(m.object);
+      folded_here[j].add((*T_map_cam)[static_cast<std::size_t>(m.keyframe)], m, models[j],
+                         (*T_map_obj)[j].linear(), config);
+    }
+    folded = &folded_here;
+  }
   std::vector<PoseBlock> cams(n_kf), objs(n_obj);
   for (std::size_t i = first_cam; i < n_kf; ++i) cams[i].set((*T_map_cam)[i]);
   for (std::size_t j = 0; j < n_obj; ++j) objs[j].set((*T_map_obj)[j]);
@@ -206,13 +295,10 @@ StageOneSummary optimizeStageOne(std::vector<Eigen::Isometry3d>* T_map_cam,
                              cams[i].data());
   }
   std::vector<char> used(n_obj, 0);
-  std::vector<double> past_weight(n_obj, 0.0);  // marginalised measurements' summed weights
   for (const StageOneMeasurement& m : measurements) {
-    if (!validMeasurement(m, n_kf, n_obj) || !(m.weight > 0.0)) continue;
-    if (static_cast<std::size_t>(m.keyframe) < first_cam) {
-      past_weight[static_cast<std::size_t>(m.object)] += m.weight;
+    if (!validMeasurement(m, n_kf, n_obj) || !(m.weight > 0.0) ||
+        static_cast<std::size_t>(m.keyframe) < first_cam)
       continue;
-    }
     PoseBlock &cam = cams[static_cast<std::size_t>(m.keyframe)],
               &obj = objs[static_cast<std::size_t>(m.object)];
     if (!used[static_cast<std::size_t>(m.object)]) {
@@ -225,13 +311,14 @@ StageOneSummary optimizeStageOne(std::vector<Eigen::Isometry3d>* T_map_cam,
                               config, std::sqrt(m.weight))));
     problem.AddResidualBlock(cost, makeLoss(config.measurement_loss), cam.data(), obj.data());
   }
-  // The marginalised past as priors on the objects the window still observes (an object seen
+  // The marginalised past as a prior on each object the window still observes (an object seen
   // only before the window keeps its pose: it is not in the problem).
   PoseBlock identity;
   identity.set(Eigen::Isometry3d::Identity());
   bool uses_identity = false;
-  for (std::size_t j = 0; j < n_obj; ++j) {
-    if (!used[j] || !(past_weight[j] > 0.0)) continue;
+  for (std::size_t j = 0; folded && j < n_obj; ++j) {
+    const FoldedMeasurements& past = (*folded)[j];
+    if (!used[j] || past.empty()) continue;
     if (!uses_identity) {
       problem.AddParameterBlock(identity.data(), 7, &manifold);
       problem.SetParameterBlockConstant(identity.data());
@@ -239,10 +326,9 @@ StageOneSummary optimizeStageOne(std::vector<Eigen::Isometry3d>* T_map_cam,
     }
     Eigen::Vector3d axis;
     const bool free = freeAxis(models[j], &axis);
-    const double s = std::sqrt(past_weight[j]);
-    auto* prior = new ceres::AutoDiffCostFunction<RelativePoseFactor, 6, 7, 7>(
-        new RelativePoseFactor((*T_map_obj)[j], s / config.measurement_sigma_position_m,
-                               s / config.measurement_sigma_rotation_rad, free, axis));
+    auto* prior =
+        new ceres::AutoDiffCostFunction<RelativePoseFactor, 6, 7, 7>(new RelativePoseFactor(
+            past.mean(), past.translationSqrtInformation(), past.rotationWeight(), free, axis));
     problem.AddResidualBlock(prior, nullptr, identity.data(), objs[j].data());
   }
   // The anchor fixes the gauge; outside the window the cameras stay where they are.

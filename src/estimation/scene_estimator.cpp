@@ -150,6 +150,7 @@ void SceneEstimator::reset() {
   support_ = SupportPlane();
   support_model_.reset();
   contacts_.clear();
+  contacts_by_id_.clear();
   held_contacts_.clear();
   frame_objects_.clear();
   monitor_.reset();
@@ -182,10 +183,15 @@ ObjectEstimate SceneEstimator::estimateOf(const Track& track) const {
 
 Eigen::Matrix<double, 6, 6> SceneEstimator::poseSpread(const Track& track,
                                                        const Eigen::Isometry3d& T_map_obj) const {
+  // The spread is taken over the latest measurements only (bounded work a keyframe on long runs)
+  // and divided by the number of all of them.
+  constexpr std::size_t kSpreadMeasurements = 100;
   Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
   const Symmetry& symmetry = track.model->symmetry;
+  const std::size_t n_all = track.observations.size();
   int n = 0;
-  for (const Observation& o : track.observations) {
+  for (std::size_t k = n_all - std::min(n_all, kSpreadMeasurements); k < n_all; ++k) {
+    const Observation& o = track.observations[k];
     if (o.keyframe < 0 || o.keyframe >= static_cast<int>(T_map_cam_.size())) continue;
     const Eigen::Isometry3d T = T_map_cam_[static_cast<std::size_t>(o.keyframe)] * o.T_cam_obj;
     const Eigen::Matrix3d R = closestSymmetricEquivalent(symmetry, T_map_obj.linear(), T.linear());
@@ -200,7 +206,7 @@ Eigen::Matrix<double, 6, 6> SceneEstimator::poseSpread(const Track& track,
     ++n;
   }
   if (n < 2) return Eigen::Matrix<double, 6, 6>::Zero();
-  return covariance / (static_cast<double>(n) * (n - 1));
+  return covariance / ((n - 1) * static_cast<double>(std::max<std::size_t>(n, n_all)));
 }
 
 std::vector<ObjectEstimate> SceneEstimator::objects() const {
@@ -522,6 +528,7 @@ void SceneEstimator::mergeOverlapping(std::vector<int>* removed) {
     for (std::size_t a = 0; a < tracks_.size() && !merged; ++a) {
       for (std::size_t b = a + 1; b < tracks_.size() && !merged; ++b) {
         Track &A = tracks_[a], &B = tracks_[b];
+        if (!recentlySeen(A) && !recentlySeen(B)) continue;  // checked when last seen
         Eigen::Isometry3d Ta = reportedPose(A), Tb = reportedPose(B);
         Ta.translation() += Ta.linear() * A.box_centre;
         Tb.translation() += Tb.linear() * B.box_centre;
@@ -555,6 +562,8 @@ void SceneEstimator::mergeOverlapping(std::vector<int>* removed) {
           std::sort(
               K.observations.begin(), K.observations.end(),
               [](const Observation& x, const Observation& y) { return x.keyframe < y.keyframe; });
+          K.folded.clear();  // folded again from the merged observations
+          for (Observation& o : K.observations) o.folded = false;
           K.best_consistency = std::max(K.best_consistency, D.best_consistency);
           K.first_keyframe = std::min(K.first_keyframe, D.first_keyframe);
           K.last_keyframe = std::max(K.last_keyframe, D.last_keyframe);
@@ -568,53 +577,48 @@ void SceneEstimator::mergeOverlapping(std::vector<int>* removed) {
 }
 
 StageReport SceneEstimator::runStageOne() {
+  StageOneConfig config = config_.stage_one;
+  config.odometry_sigma_position_m *= std::sqrt(odometry_variance_);
+  config.odometry_sigma_rotation_rad *= std::sqrt(odometry_variance_);
+  // Marginalising outside the window, the observations of cameras before the window's anchor
+  // are folded into their object's prior once, and stage I and the noise adaptation see the
+  // window's only.
+  const int first = static_cast<int>(firstKeyframeInProblem(T_map_cam_.size(), config));
   std::vector<Eigen::Isometry3d> objects;
   std::vector<const ObjectModel*> models;
+  std::vector<FoldedMeasurements> folded;
   std::vector<StageOneMeasurement> measurements;
   std::vector<std::pair<std::size_t, std::size_t>> sources;  // (track, observation)
   const std::vector<std::size_t> reported = reportedTracks();
   for (std::size_t i = 0; i < reported.size(); ++i) {
-    const Track& tr = tracks_[reported[i]];
-    objects.push_back(tr.T_stage_one);
-    models.push_back(tr.model.get());
+    Track& tr = tracks_[reported[i]];
     for (std::size_t k = 0; k < tr.observations.size(); ++k) {
-      const Observation& o = tr.observations[k];
-      const double weight = o.gated ? 0.0 : 1.0 / tr.variance;
-      measurements.push_back({o.keyframe, static_cast<int>(i), o.T_cam_obj, weight,
-                              o.refined ? config_.refinement.ray_sigma_m : 0.0});
+      Observation& o = tr.observations[k];
+      if (o.folded) continue;
+      const StageOneMeasurement m{o.keyframe, static_cast<int>(i), o.T_cam_obj,
+                                  o.gated ? 0.0 : 1.0 / tr.variance,
+                                  o.refined ? config_.refinement.ray_sigma_m : 0.0};
+      if (o.keyframe < first) {
+        tr.folded.add(T_map_cam_[static_cast<std::size_t>(o.keyframe)], m, tr.model.get(),
+                      tr.T_stage_one.linear(), config);
+        o.folded = true;
+        continue;
+      }
+      measurements.push_back(m);
       sources.emplace_back(reported[i], k);
     }
+    objects.push_back(tr.T_stage_one);
+    models.push_back(tr.model.get());
+    folded.push_back(tr.folded);
   }
-  StageOneConfig config = config_.stage_one;
-  config.odometry_sigma_position_m *= std::sqrt(odometry_variance_);
-  config.odometry_sigma_rotation_rad *= std::sqrt(odometry_variance_);
   const StageOneSummary s =
-      optimizeStageOne(&T_map_cam_, T_odom_cam_, &objects, models, measurements, config);
+      optimizeStageOne(&T_map_cam_, T_odom_cam_, &objects, models, measurements, config, &folded);
   if (s.solved) {
     for (std::size_t i = 0; i < reported.size(); ++i) tracks_[reported[i]].T_stage_one = objects[i];
-    if (stages_.stage_one_noise_adaptation && config_.stage_one.adapt_noise) {
-      if (config.marginalise_outside_window && config.window_keyframes > 0)
-        keepWindow(config.window_keyframes, &measurements, &sources);
+    if (stages_.stage_one_noise_adaptation && config_.stage_one.adapt_noise)
       adaptNoise(reported, objects, models, measurements, sources);
-    }
   }
   return {s.status, s.iterations, s.initial_cost, s.final_cost};
-}
-
-// Only the measurements of the latest `window` keyframes and the one before them (a marginalised
-// stage I's problem), with their sources.
-void SceneEstimator::keepWindow(int window, std::vector<StageOneMeasurement>* measurements,
-                                std::vector<std::pair<std::size_t, std::size_t>>* sources) const {
-  const int first = static_cast<int>(T_map_cam_.size()) - window - 1;
-  std::size_t kept = 0;
-  for (std::size_t i = 0; i < measurements->size(); ++i) {
-    if ((*measurements)[i].keyframe < first) continue;
-    (*measurements)[kept] = (*measurements)[i];
-    (*sources)[kept] = (*sources)[i];
-    ++kept;
-  }
-  measurements->resize(kept);
-  sources->resize(kept);
 }
 
 // Variance component estimation from the residuals of the solve (under the configured noise):
@@ -631,7 +635,8 @@ void SceneEstimator::adaptNoise(const std::vector<std::size_t>& reported,
   constexpr double kMedianChi2of6 = 5.35;
   std::vector<StageOneMeasurement> unit = measurements;
   for (StageOneMeasurement& m : unit) m.weight = 1.0;
-  const StageOneResiduals r = stageOneResiduals(T_map_cam_, T_odom_cam_, objects, models, unit, c);
+  const StageOneResiduals r = stageOneResiduals(T_map_cam_, T_odom_cam_, objects, models, unit, c,
+                                                firstKeyframeInProblem(T_map_cam_.size(), c));
   if (!r.odometry.empty()) {
     odometry_variance_ = std::clamp(percentile(r.odometry, 0.5) / kMedianChi2of6,
                                     c.min_odometry_variance_factor, 1.0);
@@ -650,53 +655,105 @@ void SceneEstimator::adaptNoise(const std::vector<std::size_t>& reported,
   }
 }
 
+bool SceneEstimator::recentlySeen(const Track& track) const {
+  const int window = config_.stage_two.local_map_keyframes;
+  return window <= 0 || track.last_keyframe >= static_cast<int>(T_map_cam_.size()) - 1 - window;
+}
+
+std::vector<std::size_t> SceneEstimator::localMap(const std::vector<std::size_t>& reported,
+                                                  bool everything) const {
+  std::vector<char> local(reported.size(), 0);
+  std::map<int, std::size_t> position;  // track id -> position in reported
+  for (std::size_t i = 0; i < reported.size(); ++i) {
+    const Track& tr = tracks_[reported[i]];
+    position[tr.id] = i;
+    local[i] = everything || recentlySeen(tr);
+  }
+  // Contact partners of recently seen objects join them (one step, from the last keyframe).
+  std::vector<char> partner = local;
+  for (const std::pair<int, int>& pair : held_contacts_) {
+    const auto a = position.find(pair.first), b = position.find(pair.second);
+    if (a == position.end() || b == position.end()) continue;
+    if (local[a->second]) partner[b->second] = 1;
+    if (local[b->second]) partner[a->second] = 1;
+  }
+  std::vector<std::size_t> out;
+  for (std::size_t i = 0; i < reported.size(); ++i)
+    if (partner[i]) out.push_back(i);
+  return out;
+}
+
+void SceneEstimator::updateSupportPlane(const Keyframe& kf) {
+  if (!kf.depth.data) return;
+  fuseSupportPlane(estimateSupportPlane(kf.depth, kf.K, T_map_cam_.back(), config_.gravity,
+                                        config_.support_plane),
+                   &support_);
+  if (support_.valid)
+    support_model_ =
+        supportPlaneModel(support_, &T_map_support_, config_.support_plane.thickness_m);
+}
+
 StageReport SceneEstimator::runRelationsAndStageTwo(const Keyframe* kf, StageTimings* timings) {
   auto t0 = Clock::now();
-  if (kf && kf->depth.data) {
-    fuseSupportPlane(estimateSupportPlane(kf->depth, kf->K, T_map_cam_.back(), config_.gravity,
-                                          config_.support_plane),
-                     &support_);
-    if (support_.valid) {
-      support_model_ =
-          supportPlaneModel(support_, &T_map_support_, config_.support_plane.thickness_m);
-    }
-  }
-  // Relations from the refined poses of the previous keyframe (new objects: their stage I pose).
+  if (kf) updateSupportPlane(*kf);
+  // Relations from the refined poses of the previous keyframe (new objects: their stage I pose),
+  // over the local map; the contacts among the other objects stay as they were.
   const std::vector<std::size_t> reported = reportedTracks();
+  const std::vector<std::size_t> local = localMap(reported, kf == nullptr);
   std::vector<PosedModel> posed;
-  for (std::size_t j : reported) posed.push_back({tracks_[j].model.get(), tracks_[j].T_refined});
-  PosedModel ground{support_model_.get(), T_map_support_};
-  // Track ids of a pair of indices into `posed` (-1: the support), lower first.
-  auto ids = [&](int a, int b) {
-    auto id = [&](int i) { return i < 0 ? -1 : tracks_[reported[static_cast<std::size_t>(i)]].id; };
-    return std::make_pair(std::min(id(a), id(b)), std::max(id(a), id(b)));
-  };
-  std::vector<ObjectPair> held;
-  const int n = static_cast<int>(reported.size());
-  for (int a = -1; a < n; ++a) {
-    for (int b = a + 1; b < n; ++b) {
-      if (std::find(held_contacts_.begin(), held_contacts_.end(), ids(a, b)) !=
-          held_contacts_.end())
-        held.emplace_back(a, b);
-    }
+  std::map<int, int> local_of_id = {{-1, -1}}, reported_of_id = {{-1, -1}};
+  for (std::size_t i = 0; i < local.size(); ++i) {
+    const Track& tr = tracks_[reported[local[i]]];
+    posed.push_back({tr.model.get(), tr.T_refined});
+    local_of_id[tr.id] = static_cast<int>(i);
   }
-  contacts_ = inferRelations(posed, support_model_ ? &ground : nullptr, config_.gravity,
-                             config_.contacts, held);
+  for (std::size_t i = 0; i < reported.size(); ++i)
+    reported_of_id[tracks_[reported[i]].id] = static_cast<int>(i);
+  std::vector<ObjectPair> held;
+  for (const std::pair<int, int>& pair : held_contacts_) {
+    const auto a = local_of_id.find(pair.first), b = local_of_id.find(pair.second);
+    if (a != local_of_id.end() && b != local_of_id.end())
+      held.emplace_back(std::min(a->second, b->second), std::max(a->second, b->second));
+  }
+  PosedModel ground{support_model_.get(), T_map_support_};
+  const std::vector<FeatureContact> local_contacts = inferRelations(
+      posed, support_model_ ? &ground : nullptr, config_.gravity, config_.contacts, held);
+
+  std::vector<FeatureContact> by_id;
+  auto local_id = [&](int i) { return i < 0 ? -1 : tracks_[reported[local[i]]].id; };
+  for (FeatureContact c : local_contacts) {
+    c.object_a = local_id(c.object_a), c.object_b = local_id(c.object_b);
+    by_id.push_back(c);
+  }
+  for (const FeatureContact& c : contacts_by_id_) {  // kept: no end in the local map, both exist
+    if ((c.object_a >= 0 && local_of_id.count(c.object_a)) ||
+        (c.object_b >= 0 && local_of_id.count(c.object_b)) || !reported_of_id.count(c.object_a) ||
+        !reported_of_id.count(c.object_b))
+      continue;
+    by_id.push_back(c);
+  }
+  contacts_by_id_ = by_id;
+  contacts_.clear();
   held_contacts_.clear();
-  for (const FeatureContact& c : contacts_) held_contacts_.push_back(ids(c.object_a, c.object_b));
+  for (FeatureContact c : by_id) {
+    held_contacts_.emplace_back(std::min(c.object_a, c.object_b), std::max(c.object_a, c.object_b));
+    c.object_a = reported_of_id[c.object_a], c.object_b = reported_of_id[c.object_b];
+    contacts_.push_back(c);
+  }
   if (timings) timings->relations_ms = msSince(t0);
 
   t0 = Clock::now();
   std::vector<Eigen::Isometry3d> poses, priors;
   std::vector<const ObjectModel*> models;
-  for (std::size_t j : reported) {
-    poses.push_back(tracks_[j].T_refined);
-    priors.push_back(tracks_[j].T_stage_one);
-    models.push_back(tracks_[j].model.get());
+  for (std::size_t i : local) {
+    const Track& tr = tracks_[reported[i]];
+    poses.push_back(tr.T_refined);
+    priors.push_back(tr.T_stage_one);
+    models.push_back(tr.model.get());
   }
-  const StageTwoSummary s = optimizeStageTwo(&poses, models, priors, contacts_,
+  const StageTwoSummary s = optimizeStageTwo(&poses, models, priors, local_contacts,
                                              support_model_ ? &ground : nullptr, config_.stage_two);
-  for (std::size_t i = 0; i < reported.size(); ++i) tracks_[reported[i]].T_refined = poses[i];
+  for (std::size_t i = 0; i < local.size(); ++i) tracks_[reported[local[i]]].T_refined = poses[i];
   // Candidates follow their stage I / initial pose.
   for (Track& tr : tracks_)
     if (!tr.confirmed) tr.T_refined = tr.T_stage_one;

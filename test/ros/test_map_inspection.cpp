@@ -108,9 +108,13 @@ TEST(MapInspection, LabelsInClutterRiseAboveEachOther) {
   const auto levels = labelLevels(tops, 0.12);
   EXPECT_EQ(levels, (std::vector<int>{0, 1, 2, 0, 0}));
   // No two labels on one level closer than the spacing.
-  for (std::size_t i = 0; i < tops.size(); ++i)
-    for (std::size_t j = 0; j < i; ++j)
-      if (levels[i] == levels[j]) EXPECT_GE((tops[i] - tops[j]).head<2>().norm(), 0.12);
+  for (std::size_t i = 0; i < tops.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      if (levels[i] == levels[j]) {
+        EXPECT_GE((tops[i] - tops[j]).head<2>().norm(), 0.12);
+      }
+    }
+  }
 }
 
 }  // namespace

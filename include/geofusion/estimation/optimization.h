@@ -33,11 +33,11 @@ struct StageOneConfig {
   /// Only the latest N keyframe poses are free (older ones fixed, their measurements still
   /// constrain the objects); 0 = all. Bounds the time of a run on long sequences.
   int window_keyframes = 60;
-  /// Outside the window, marginalise instead of fixing: the older cameras and their measurements
-  /// leave the problem, each object the window observes gets a prior at its current pose with
-  /// their summed information, and the noise adaptation looks at the window only. Stage I's cost
-  /// then depends on the window and the objects in view, not on the length of the run (issue
-  /// 22; off until the benchmark shows the same accuracy as the full solve).
+  /// Outside the window, marginalise instead of keeping: the cameras older than the window's
+  /// anchor leave the problem, and their measurements (absolute measurements of the objects, the
+  /// cameras being fixed) are folded into one prior per object (FoldedMeasurements); the noise
+  /// adaptation looks at the window only. The fixed window's answer at a cost that depends on
+  /// the window and the objects in view, not on the length of the run (issue 22).
   bool marginalise_outside_window = false;
   /// Noise adaptation (GeoFusion; variance component estimation from the residuals of each
   /// solve, used by the next): the odometry's variance scaled by a factor in
@@ -89,19 +89,64 @@ struct StageOneSummary {
   std::string message;
 };
 
+/// Object measurements whose cameras left stage I's window, folded into one prior on the object
+/// in the map frame. A camera outside the window no longer moves, so each of its measurements is
+/// an absolute measurement of the object: their translation terms sum exactly (information-
+/// weighted mean, 3 x 3 information in the map frame, rays included), their rotations are
+/// averaged (chordal mean after each is brought to the symmetric equivalent nearest a reference;
+/// weights summed). The robust loss is not carried over (gated measurements have weight 0).
+class FoldedMeasurements {
+ public:
+  /// Folds `m` (its keyframe's camera at `T_map_cam`); `R_reference` picks the symmetric
+  /// equivalent (the object's current rotation). Measurements of weight 0 are counted only.
+  void add(const Eigen::Isometry3d& T_map_cam, const StageOneMeasurement& m,
+           const ObjectModel* model, const Eigen::Matrix3d& R_reference,
+           const StageOneConfig& config);
+  void clear() { *this = FoldedMeasurements(); }
+  bool empty() const { return !(rotation_information_ > 0.0); }
+  int count() const { return count_; }  ///< measurements folded (weight 0 included)
+  /// The prior: mean pose, square-root information of the translation (map frame) and the
+  /// rotation's weight (the factors' w_q).
+  Eigen::Isometry3d mean() const;
+  Eigen::Matrix3d translationSqrtInformation() const;
+  double rotationWeight() const;
+  /// Covariance of the folded estimate, [translation (map frame); rotation (map frame)].
+  Eigen::Matrix<double, 6, 6> covariance() const;
+
+ private:
+  Eigen::Matrix3d translation_information_ = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d information_vector_ = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d rotation_sum_ = Eigen::Matrix3d::Zero();  ///< weighted sum of rotations
+  double rotation_information_ = 0.0;                       ///< sum of w / sigma_r^2
+  int count_ = 0;
+};
+
+/// The rotation `R_measured` brought to the symmetric equivalent nearest `R_reference`: the
+/// closest discrete equivalent, or for a continuous symmetry the rotation about its axis.
+Eigen::Matrix3d alignToReference(const Symmetry& symmetry, const Eigen::Matrix3d& R_reference,
+                                 const Eigen::Matrix3d& R_measured);
+
 /// Stage I. `T_map_cam` (in/out) are the keyframe camera poses, the first held fixed;
 /// `T_odom_cam` the odometry the consecutive-keyframe factors come from; `T_map_obj` (in/out)
 /// the object poses of `models` (for their symmetry). Warm-started from the values passed in.
+/// Marginalising outside the window, the measurements of cameras before the window's anchor are
+/// taken from `folded` (one per object, kept by the caller as cameras leave the window) and those
+/// in `measurements` are ignored; with `folded` null they are folded here from `measurements`.
 StageOneSummary optimizeStageOne(std::vector<Eigen::Isometry3d>* T_map_cam,
                                  const std::vector<Eigen::Isometry3d>& T_odom_cam,
                                  std::vector<Eigen::Isometry3d>* T_map_obj,
                                  const std::vector<const ObjectModel*>& models,
                                  const std::vector<StageOneMeasurement>& measurements,
-                                 const StageOneConfig& config);
+                                 const StageOneConfig& config,
+                                 const std::vector<FoldedMeasurements>* folded = nullptr);
+/// The first keyframe stage I keeps in its problem for `n_keyframes` keyframes: the window's
+/// anchor when marginalising outside a window, else 0.
+std::size_t firstKeyframeInProblem(std::size_t n_keyframes, const StageOneConfig& config);
 
 /// Squared whitened residuals (unit weight, no robust loss) of stage I's factors at the given
-/// poses: one per odometry factor (keyframes i - 1, i) and one per measurement, in order (0 for a
-/// measurement that refers to no keyframe or object). The estimator's noise adaptation reads them.
+/// poses: one per odometry factor (keyframes i - 1, i) from `first_keyframe` on and one per
+/// measurement, in order (0 for a measurement that refers to no keyframe or object). The
+/// estimator's noise adaptation reads them.
 struct StageOneResiduals {
   std::vector<double> odometry, measurements;
 };
@@ -110,7 +155,7 @@ StageOneResiduals stageOneResiduals(const std::vector<Eigen::Isometry3d>& T_map_
                                     const std::vector<Eigen::Isometry3d>& T_map_obj,
                                     const std::vector<const ObjectModel*>& models,
                                     const std::vector<StageOneMeasurement>& measurements,
-                                    const StageOneConfig& config);
+                                    const StageOneConfig& config, std::size_t first_keyframe = 0);
 
 struct StageTwoConfig {
   double prior_sigma_position_m = 0.01;  ///< object prior factor (from stage I)
@@ -125,6 +170,11 @@ struct StageTwoConfig {
   /// `bench`, more flip-flops: docs/BENCHMARK.md).
   bool leaning_contacts = true;
   bool side_contacts = false;
+  /// The local map: the relations, stage II and the overlap merge look at the objects seen in
+  /// the latest N keyframes and those in contact with them; the others keep their pose and
+  /// contacts until seen again (their cost stays bounded on long runs). 0: every object, every
+  /// keyframe. The final solve of a run (finish) takes every object.
+  int local_map_keyframes = 60;
 };
 
 struct StageTwoSummary {

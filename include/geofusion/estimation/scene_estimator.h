@@ -223,6 +223,7 @@ class SceneEstimator {
     double consistency = 0.0;  ///< f_gc (B-SLAM: the detector score)
     bool refined = false;      ///< depth-refined: tight along the ray in stage I
     bool gated = false;        ///< left out of stage I (residual beyond the gate)
+    bool folded = false;       ///< its camera left stage I's window: in Track::folded
   };
   struct Track {
     int id = -1;
@@ -230,6 +231,8 @@ class SceneEstimator {
     Eigen::Isometry3d T_stage_one = Eigen::Isometry3d::Identity();  ///< stage I / initial
     Eigen::Isometry3d T_refined = Eigen::Isometry3d::Identity();    ///< stage II
     std::vector<Observation> observations;
+    /// Marginalising outside stage I's window: the observations whose cameras left it.
+    FoldedMeasurements folded;
     double best_consistency = 0.0;
     int first_keyframe = -1, last_keyframe = -1;
     bool confirmed = false;        ///< false-positive score at most eps_fp: part of the map
@@ -284,13 +287,19 @@ class SceneEstimator {
                                std::vector<int>* removed);
   bool stageOneDue(int t) const;
   StageReport runStageOne();
-  void keepWindow(int window, std::vector<StageOneMeasurement>* measurements,
-                  std::vector<std::pair<std::size_t, std::size_t>>* sources) const;
   void adaptNoise(const std::vector<std::size_t>& reported,
                   const std::vector<Eigen::Isometry3d>& objects,
                   const std::vector<const ObjectModel*>& models,
                   const std::vector<StageOneMeasurement>& measurements,
                   const std::vector<std::pair<std::size_t, std::size_t>>& sources);
+  /// Whether a track is in the local map (stage_two.local_map_keyframes) at the latest keyframe.
+  bool recentlySeen(const Track& track) const;
+  /// Positions in `reported` of the local map's objects: those recently seen and their contact
+  /// partners (all with `everything`).
+  std::vector<std::size_t> localMap(const std::vector<std::size_t>& reported,
+                                    bool everything) const;
+  void updateSupportPlane(const Keyframe& keyframe);
+  /// Relations and stage II over the local map (`keyframe` null: the final solve, every object).
   StageReport runRelationsAndStageTwo(const Keyframe* keyframe, StageTimings* timings);
   KeyframeResult result(int keyframe, double stamp) const;
 
@@ -310,7 +319,8 @@ class SceneEstimator {
   SupportPlane support_;
   std::shared_ptr<ObjectModel> support_model_;
   Eigen::Isometry3d T_map_support_ = Eigen::Isometry3d::Identity();
-  std::vector<FeatureContact> contacts_;  ///< reported-track indices; -1 = support
+  std::vector<FeatureContact> contacts_;        ///< reported-track indices; -1 = support
+  std::vector<FeatureContact> contacts_by_id_;  ///< contacts_ with track ids (-1 = support)
   /// Pairs in contact at the last keyframe, as track ids (-1 = the support), for hysteresis.
   std::vector<std::pair<int, int>> held_contacts_;
   std::vector<ObjectEstimate> frame_objects_;  ///< FbF: this keyframe's detections
