@@ -5,7 +5,11 @@
 // plots the CSV; `make soak` runs both. A benchmark that prints figures, not a test.
 //
 //   soak_benchmark --out soak.csv [--keyframes 2000] [--tables 3] [--visit 100] [--objects 20]
-//                  [--seed 7] [--models DIR] [--params FILE] [--set KEY=VALUE]...
+//                  [--seed 7] [--detector densefusion_persistent] [--bias-scale 1]
+//                  [--models DIR] [--params FILE] [--set KEY=VALUE]...
+//
+// --bias-scale multiplies the detector's persistent errors (bias, error along the ray, phantoms,
+// swapped and missed stretches): 0 gives the same run with independent errors only.
 //
 // DIR holds the YCB-Video models (default ../shared/data/ycb_video beside the source tree);
 // without them the built-in primitives are used and the output says so.
@@ -23,6 +27,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -39,13 +44,16 @@ struct Options {
   ConfigOptions config;  ///< --params, --set
   int keyframes = 2000, tables = 3, visit = 100, objects = 20;
   unsigned seed = 7;
+  std::string detector = "densefusion_persistent";
+  double bias_scale = 1.0;
 };
 
 void usage() {
   std::printf(
       "usage: soak_benchmark --out soak.csv [--keyframes 2000] [--tables 3] [--visit 100]\n"
-      "                      [--objects 20] [--seed 7] [--models DIR] [--params FILE]\n"
-      "                      [--set KEY=VALUE]...\n");
+      "                      [--objects 20] [--seed 7] [--detector densefusion_persistent]\n"
+      "                      [--bias-scale 1] [--models DIR] [--params FILE] [--set "
+      "KEY=VALUE]...\n");
 }
 
 // Resident memory of this process, MB (/proc/self/statm).
@@ -127,6 +135,16 @@ std::vector<ObjectEstimate> alignedToTruth(const std::vector<ObjectEstimate>& ne
   return out;
 }
 
+// The detector's persistent errors times `k` (k = 0: independent errors only).
+void scalePersistentErrors(PersistentErrorModel* p, double k) {
+  p->bias_translation_m *= k;
+  p->bias_rotation_rad *= k;
+  p->ray_depth_fraction *= k;
+  p->swap_stretch_rate *= k;
+  p->miss_stretch_rate *= k;
+  p->phantoms = static_cast<int>(std::lround(k * p->phantoms));
+}
+
 // p95 of the total time over keyframes [from, to).
 double p95(const std::vector<double>& ms, std::size_t from, std::size_t to) {
   to = std::min(to, ms.size());
@@ -149,11 +167,14 @@ int main(int argc, char** argv) {
     args.value("--objects", &o.objects);
     args.value("--seed", &o.seed);
     args.value("--models", &o.models_dir);
+    args.value("--detector", &o.detector);
+    args.value("--bias-scale", &o.bias_scale);
     o.config.declare(&args);
     args.parse(argc, argv, usage);
     if (o.out.empty()) throw std::runtime_error("--out needed");
     if (o.keyframes < 1 || o.tables < 1 || o.visit < 1 || o.objects < 1)
       throw std::runtime_error("--keyframes, --tables, --visit and --objects must be positive");
+    if (!(o.bias_scale >= 0.0)) throw std::runtime_error("--bias-scale must be >= 0");
   } catch (const std::exception& e) {
     std::cerr << "soak_benchmark: " << e.what() << "\n";
     usage();
@@ -179,6 +200,11 @@ int main(int argc, char** argv) {
   }
   SuiteSpec suite;
   suiteByName("bench", &suite);
+  if (!DetectorModel::byName(o.detector, &suite.detector)) {
+    std::cerr << "soak_benchmark: unknown --detector " << o.detector << "\n";
+    return 2;
+  }
+  scalePersistentErrors(&suite.detector.persistence, o.bias_scale);
   std::vector<ClutterScene> scenes(static_cast<std::size_t>(o.tables));
   for (int t = 0; t < o.tables; ++t) {
     SceneSpec spec{"soak_table_" + std::to_string(t), o.seed + 17 * static_cast<unsigned>(t),
@@ -197,9 +223,10 @@ int main(int argc, char** argv) {
     renderers.push_back(std::make_unique<SequenceRenderer>(scene, K));
   std::printf(
       "soak: %zu keyframes, %d tables of %d %s objects, visits of %d keyframes in turn; method %s\n"
-      "configuration: %s\n",
+      "detector: %s, persistent errors x %.2f\nconfiguration: %s\n",
       run.size(), o.tables, o.objects, ycb ? "YCB-Video" : "primitive", o.visit,
-      toString(config.estimator.method), configDiff(config).c_str());
+      toString(config.estimator.method), o.detector.c_str(), o.bias_scale,
+      configDiff(config).c_str());
 
   SceneEstimator estimator(models, config.estimator);
   std::mt19937 rng(o.seed + 2000);

@@ -27,6 +27,14 @@ BackgroundMap::BackgroundMap(const BackgroundMapConfig& config,
                              std::shared_ptr<OffscreenRenderer> renderer)
     : config_(config), impl_(std::make_unique<Impl>(config.resolution_m)) {
   impl_->renderer = renderer ? std::move(renderer) : std::make_shared<OffscreenRenderer>();
+  if (config.region_half_extent_m > 0) {
+    const float e = static_cast<float>(config.region_half_extent_m);
+    const float h = static_cast<float>(0.99 * 32767 * config.resolution_m);  // the tree's reach
+    octomap::point3d lo(-e, -e, -h), hi(e, e, h);
+    impl_->tree.setBBXMin(lo);
+    impl_->tree.setBBXMax(hi);
+    impl_->tree.useBBXLimit(true);
+  }
 }
 
 BackgroundMap::~BackgroundMap() = default;

@@ -441,6 +441,10 @@ class Table {
             [f](GeoFusionConfig& c) { return &f(c)->object_margin_px; });
     real("background.object_margin_m", 0, 0.5, "points this close behind an object are left out, m",
          [f](GeoFusionConfig& c) { return &f(c)->object_margin_m; });
+    real("background.region_half_extent_m", 0, 10000,
+         "> 0: only the square of this half extent about the map origin (x, y; every height) is "
+         "mapped (memory bounded by the region), m; 0: unbounded",
+         [f](GeoFusionConfig& c) { return &f(c)->region_half_extent_m; });
   }
   void visualOdometry() {
     auto f = [](GeoFusionConfig& c) { return &c.visual_odometry; };

@@ -40,6 +40,34 @@ struct TableWithBox {
   }
 };
 
+// Issue 22: a region bounds the map: nothing is mapped outside it, however far the rays reach.
+TEST(BackgroundMap, ARegionBoundsTheMap) {
+  TableWithBox scene;
+  ASSERT_TRUE(scene.renderer->ok());
+  BackgroundMapConfig config;
+  config.region_half_extent_m = 0.25;  // the table's middle (it is 1.2 x 0.8 m)
+  BackgroundMap bounded(config, scene.renderer);
+  BackgroundMap unbounded(BackgroundMapConfig(), scene.renderer);
+  for (std::size_t k = 0; k < scene.frames.size(); ++k) {
+    const DepthImageView depth{scene.frames[k].depth.data(), scene.K.width, scene.K.height};
+    bounded.insert(depth, scene.K, scene.cameras[k], {});
+    unbounded.insert(depth, scene.K, scene.cameras[k], {});
+  }
+  const double half = 0.25 + config.resolution_m;
+  int outside = 0, inside = 0;
+  for (const Eigen::Vector3d& p : bounded.occupiedCentres()) {
+    const bool in = p.head<2>().cwiseAbs().maxCoeff() <= half;
+    inside += in;
+    outside += !in;
+  }
+  EXPECT_EQ(outside, 0);
+  EXPECT_GT(inside, 100);
+  EXPECT_LT(bounded.numLeaves(), unbounded.numLeaves() / 2);
+  EXPECT_TRUE(bounded.isOccupied(Eigen::Vector3d(0.2, 0.2, 0.745)));
+  EXPECT_FALSE(bounded.isOccupied(Eigen::Vector3d(-0.45, 0.2, 0.745)));
+  EXPECT_TRUE(unbounded.isOccupied(Eigen::Vector3d(-0.45, 0.2, 0.745)));
+}
+
 TEST(BackgroundMap, TableInObjectsOut) {
   TableWithBox scene;
   ASSERT_TRUE(scene.renderer->ok());

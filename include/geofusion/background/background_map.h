@@ -23,6 +23,10 @@ struct BackgroundMapConfig {
   int pixel_stride = 4;           ///< use every n-th row and column
   int object_margin_px = 4;       ///< object masks grow by this many pixels
   double object_margin_m = 0.02;  ///< ... and points this close behind an object are left out
+  /// > 0: only the square of this half extent about the map origin (x and y, every height) is
+  /// mapped (OctoMap's bounding box limit), so the map's memory is bounded by the region however
+  /// long the robot drives; 0: unbounded.
+  double region_half_extent_m = 0.0;
 };
 
 /// An object of the map to keep out of the background.
