@@ -16,7 +16,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy  # noqa: E402
 
 STAGES = [('consistency_ms', 'consistency + refinement'), ('association_ms', 'association'),
-          ('stage_one_ms', 'stage I'), ('relations_ms', 'relations'),
+          ('lifecycle_ms', 'lifecycle'), ('stage_one_ms', 'stage I'), ('relations_ms', 'relations'),
           ('stage_two_ms', 'stage II')]
 
 

@@ -230,7 +230,8 @@ int main(int argc, char** argv) {
 
   SceneEstimator estimator(models, config.estimator);
   std::mt19937 rng(o.seed + 2000);
-  csv << "keyframe,table,visit,detections,objects,consistency_ms,association_ms,stage_one_ms,"
+  csv << "keyframe,table,visit,detections,objects,tentative,consistency_ms,association_ms,"
+         "lifecycle_ms,stage_one_ms,"
          "relations_ms,stage_two_ms,total_ms,rss_mb\n";
   std::vector<double> total_ms, rss_mb;
   const auto start = std::chrono::steady_clock::now();
@@ -242,9 +243,10 @@ int main(int argc, char** argv) {
     total_ms.push_back(r.timings.total_ms);
     rss_mb.push_back(residentMb());
     csv << k << ',' << f.table << ',' << f.visit << ',' << frame.detections.size() << ','
-        << r.objects.size() << ',' << r.timings.consistency_ms << ',' << r.timings.association_ms
-        << ',' << r.timings.stage_one_ms << ',' << r.timings.relations_ms << ','
-        << r.timings.stage_two_ms << ',' << r.timings.total_ms << ',' << rss_mb.back() << '\n';
+        << r.objects.size() << ',' << r.tentative.size() << ',' << r.timings.consistency_ms << ','
+        << r.timings.association_ms << ',' << r.timings.lifecycle_ms << ','
+        << r.timings.stage_one_ms << ',' << r.timings.relations_ms << ',' << r.timings.stage_two_ms
+        << ',' << r.timings.total_ms << ',' << rss_mb.back() << '\n';
     if ((k + 1) % 100 == 0) {
       std::printf("  keyframe %zu: %zu objects, p95 of the last 100 %.1f ms, %.0f MB\n", k + 1,
                   r.objects.size(), p95(total_ms, k + 1 - 100, k + 1), rss_mb.back());

@@ -57,6 +57,7 @@ void emitTimings(YAML::Emitter& out, const StageTimings& t) {
   out << YAML::Key << "timings_ms" << YAML::Value << YAML::Flow << YAML::BeginMap;
   out << YAML::Key << "consistency" << YAML::Value << t.consistency_ms;
   out << YAML::Key << "association" << YAML::Value << t.association_ms;
+  out << YAML::Key << "lifecycle" << YAML::Value << t.lifecycle_ms;
   out << YAML::Key << "stage_one" << YAML::Value << t.stage_one_ms;
   out << YAML::Key << "relations" << YAML::Value << t.relations_ms;
   out << YAML::Key << "stage_two" << YAML::Value << t.stage_two_ms;
@@ -256,6 +257,7 @@ StageTimings readTimings(const YAML::Node& t) {
   StageTimings s;
   s.consistency_ms = t["consistency"].as<double>();
   s.association_ms = t["association"].as<double>();
+  if (t["lifecycle"]) s.lifecycle_ms = t["lifecycle"].as<double>();  // since issue 22
   s.stage_one_ms = t["stage_one"].as<double>();
   s.relations_ms = t["relations"].as<double>();
   s.stage_two_ms = t["stage_two"].as<double>();

@@ -246,6 +246,9 @@ KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
                                           ? mapKeyframeDetections(kf, detections, t)
                                           : associateDetections(kf, detections, t, &started);
   const std::vector<int> assigned = detection_object;
+  timings.association_ms = msSince(t0);
+
+  t0 = Clock::now();
   std::vector<int> removed;
   if (stages_.false_positive_removal) {
     std::vector<int> touched;
@@ -258,7 +261,7 @@ KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
       if (std::find(removed.begin(), removed.end(), id) != removed.end()) id = -1;
     }
   }
-  timings.association_ms = msSince(t0);
+  timings.lifecycle_ms = msSince(t0);
 
   StageReport stage_one, stage_two;
   if (stages_.stage_one && stageOneDue(t)) {

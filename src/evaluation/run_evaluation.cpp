@@ -715,6 +715,7 @@ bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::s
   };
   series("consistency", &StageTimings::consistency_ms);
   series("association", &StageTimings::association_ms);
+  series("lifecycle", &StageTimings::lifecycle_ms);
   series("stage_one", &StageTimings::stage_one_ms);
   series("relations", &StageTimings::relations_ms);
   series("stage_two", &StageTimings::stage_two_ms);

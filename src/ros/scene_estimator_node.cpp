@@ -421,6 +421,7 @@ void SceneEstimatorNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   status.add("failed optimisation stages", failed_stages_);
   status.add("last keyframe ms: consistency", t.consistency_ms);
   status.add("last keyframe ms: association", t.association_ms);
+  status.add("last keyframe ms: lifecycle", t.lifecycle_ms);
   status.add("last keyframe ms: stage I", t.stage_one_ms);
   status.add("last keyframe ms: relations", t.relations_ms);
   status.add("last keyframe ms: stage II", t.stage_two_ms);

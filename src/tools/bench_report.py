@@ -65,7 +65,7 @@ METHOD_ORDER = ['FbF', 'FbF-R', 'B-SLAM', 'R-Front', 'GeoFusion']
 OURS = 'GeoFusion'
 BASELINE = 'FbF'
 SCORE_THRESHOLD = 0.5
-STAGES = ['consistency', 'association', 'stage_one', 'relations', 'stage_two']
+STAGES = ['consistency', 'association', 'lifecycle', 'stage_one', 'relations', 'stage_two']
 CONTACT_COLOURS = {'P2P': 'tab:blue', 'P2C': 'tab:orange', 'C2C': 'tab:green', 'P2E': 'tab:red'}
 
 # The paper's figures: Table I (mAP, percent) and Table II (precision / recall at score 0.5).

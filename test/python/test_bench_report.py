@@ -67,6 +67,7 @@ def make_eval(method='GeoFusion', scene='s1', n_images=2, detect=None, extra_gt=
                        'adds_m': [0.003, 0.004, 0.005, 0.02], 'contacts': contacts,
                        'penetration_mm': [0.0, 1.0, 2.0], 'gap_mm': [0.5, 1.5]}
     ev['timings_ms'] = {'consistency': [1.0] * n_images, 'association': [2.0] * n_images,
+                        'lifecycle': [0.5] * n_images,
                         'stage_one': [3.0] * n_images, 'relations': [1.0] * n_images,
                         'stage_two': [3.0] * n_images,
                         'total': [10.0 + 10.0 * i for i in range(n_images)]}

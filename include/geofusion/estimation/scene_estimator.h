@@ -119,6 +119,8 @@ struct ObjectEstimate {
 struct StageTimings {
   double consistency_ms = 0.0;
   double association_ms = 0.0;
+  /// Object lifecycle: false-positive removal, free-space checks (renders), merging.
+  double lifecycle_ms = 0.0;
   double stage_one_ms = 0.0;
   double relations_ms = 0.0;
   double stage_two_ms = 0.0;
