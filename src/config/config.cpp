@@ -264,6 +264,10 @@ class Table {
     integer("lifecycle.free_space_keyframes", 1, 10000,
             "... removed after this many keyframes in a row showing free space",
             [f](GeoFusionConfig& c) { return &f(c)->free_space_keyframes; });
+    integer("lifecycle.max_checks_per_keyframe", 0, 10000,
+            "at most this many free-space checks (renders) a keyframe, least recently checked "
+            "first (0: all)",
+            [f](GeoFusionConfig& c) { return &f(c)->max_checks_per_keyframe; });
   }
   void association() {
     auto f = [](GeoFusionConfig& c) { return &c.estimator.association; };

@@ -496,20 +496,38 @@ void SceneEstimator::removeObjectsSeenAbsent(const Keyframe& kf, const std::vect
   if (!kf.depth.data) return;
   const LifecycleConfig& c = config_.lifecycle;
   const Eigen::Isometry3d T_cam_map = T_map_cam_.back().inverse();
+  const int t = static_cast<int>(T_map_cam_.size()) - 1;
+  // The confirmed objects no detection measured, least recently checked first; at most
+  // max_checks_per_keyframe of them rendered (an object out of view costs no render).
+  std::vector<std::size_t> unmeasured;
+  for (std::size_t j = 0; j < tracks_.size(); ++j) {
+    Track& tr = tracks_[j];
+    if (std::find(measured.begin(), measured.end(), tr.id) != measured.end())
+      tr.free_space_keyframes = 0;
+    else if (tr.confirmed)
+      unmeasured.push_back(j);
+  }
+  std::stable_sort(unmeasured.begin(), unmeasured.end(), [&](std::size_t a, std::size_t b) {
+    return tracks_[a].last_checked < tracks_[b].last_checked;
+  });
+  int checks = 0;
+  for (std::size_t j : unmeasured) {
+    if (c.max_checks_per_keyframe > 0 && checks >= c.max_checks_per_keyframe) break;
+    Track& tr = tracks_[j];
+    const ConsistencyResult seen =
+        scorer_->score(tr.model, T_cam_map * reportedPose(tr), kf.depth, kf.K);
+    if (seen.rendered == 0) continue;  // out of view
+    ++checks;
+    tr.last_checked = t;
+    if (seen.determined && seen.r_occ <= c.max_occlusion_ratio) {
+      if (seen.r_out >= c.free_space_outlier_ratio)
+        ++tr.free_space_keyframes;
+      else if (seen.r_in >= c.seen_inlier_ratio)
+        tr.free_space_keyframes = 0;
+    }
+  }
   std::vector<Track> kept;
   for (Track& tr : tracks_) {
-    const bool was_measured = std::find(measured.begin(), measured.end(), tr.id) != measured.end();
-    if (was_measured) tr.free_space_keyframes = 0;
-    if (tr.confirmed && !was_measured) {
-      const ConsistencyResult seen =
-          scorer_->score(tr.model, T_cam_map * reportedPose(tr), kf.depth, kf.K);
-      if (seen.determined && seen.r_occ <= c.max_occlusion_ratio) {
-        if (seen.r_out >= c.free_space_outlier_ratio)
-          ++tr.free_space_keyframes;
-        else if (seen.r_in >= c.seen_inlier_ratio)
-          tr.free_space_keyframes = 0;
-      }
-    }
     if (tr.free_space_keyframes >= std::max(1, c.free_space_keyframes))
       removed->push_back(tr.id);
     else

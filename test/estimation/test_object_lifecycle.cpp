@@ -94,6 +94,33 @@ TEST_F(ObjectLifecycleTest, AnObjectTakenAwayLeavesTheMapWithinFiveKeyframes) {
   EXPECT_TRUE(mapped(r, box) && mapped(r, can));  // the others stay
 }
 
+// Issue 22: the free-space checks are bounded a keyframe (the least recently checked first), so
+// undetected objects cost a fixed number of renders; each still leaves, later.
+TEST_F(ObjectLifecycleTest, FreeSpaceChecksAreBoundedAndTakeTurns) {
+  EstimatorConfig config;
+  config.lifecycle.max_checks_per_keyframe = 1;
+  estimator = std::make_unique<SceneEstimator>(models, config, test::sharedRenderer());
+  KeyframeResult r;
+  for (int k = 0; k < 5; ++k) r = step({box, brick, can});
+  ASSERT_TRUE(mapped(r, brick) && mapped(r, box));
+  scene.setHidden(brick, true);  // two picked up at once
+  scene.setHidden(box, true);
+  scene.renderObserved();
+  int brick_gone = -1, box_gone = -1;
+  for (int k = 1; k <= 12; ++k) {
+    r = step({can});
+    if (brick_gone < 0 && !mapped(r, brick)) brick_gone = k;
+    if (box_gone < 0 && !mapped(r, box)) box_gone = k;
+  }
+  // One check a keyframe, taking turns: each object is checked every other keyframe, so it needs
+  // 2 x free_space_keyframes (3) keyframes at most; unbounded, both would go within 3.
+  EXPECT_GE(brick_gone, 4);
+  EXPECT_LE(brick_gone, 6);
+  EXPECT_GE(box_gone, 4);
+  EXPECT_LE(box_gone, 6);
+  EXPECT_TRUE(mapped(r, can));
+}
+
 TEST_F(ObjectLifecycleTest, AMovedObjectIsMappedWhereItIsNotWhereItWas) {
   KeyframeResult r;
   for (int k = 0; k < 5; ++k) r = step({box, brick, can});

@@ -72,6 +72,10 @@ struct LifecycleConfig {
   double max_occlusion_ratio = 0.5;
   double seen_inlier_ratio = 0.5;
   int free_space_keyframes = 3;
+  /// At most this many of the checks (renders) a keyframe, the objects checked least recently
+  /// first: the cost stays bounded when many mapped objects go undetected (biased or missing
+  /// detections). 0: every undetected object in view, every keyframe.
+  int max_checks_per_keyframe = 8;
 };
 
 struct EstimatorConfig {
@@ -240,6 +244,7 @@ class SceneEstimator {
     bool confirmed = false;        ///< false-positive score at most eps_fp: part of the map
     double variance = 1.0;         ///< stage I measurement variance factor (noise adaptation)
     int free_space_keyframes = 0;  ///< keyframes in a row showing free space where it should be
+    int last_checked = -1;         ///< keyframe of its last free-space check (rendered)
     int prior_measurements = 0;    ///< measurements made before a resume (saved with the map)
     /// n_j: its measurements, those before a resume included.
     int measurementCount() const {
