@@ -232,8 +232,9 @@ int main(int argc, char** argv) {
   std::mt19937 rng(o.seed + 2000);
   csv << "keyframe,table,visit,detections,objects,tentative,consistency_ms,association_ms,"
          "lifecycle_ms,stage_one_ms,"
-         "relations_ms,stage_two_ms,total_ms,rss_mb\n";
+         "relations_ms,stage_two_ms,total_ms,rss_mb,relocalised\n";
   std::vector<double> total_ms, rss_mb;
+  int relocalisations = 0;
   const auto start = std::chrono::steady_clock::now();
   for (std::size_t k = 0; k < run.size(); ++k) {
     const RunFrame& f = run[k];
@@ -246,7 +247,9 @@ int main(int argc, char** argv) {
         << r.objects.size() << ',' << r.tentative.size() << ',' << r.timings.consistency_ms << ','
         << r.timings.association_ms << ',' << r.timings.lifecycle_ms << ','
         << r.timings.stage_one_ms << ',' << r.timings.relations_ms << ',' << r.timings.stage_two_ms
-        << ',' << r.timings.total_ms << ',' << rss_mb.back() << '\n';
+        << ',' << r.timings.total_ms << ',' << rss_mb.back() << ','
+        << (r.relocalisation.applied ? 1 : 0) << '\n';
+    relocalisations += r.relocalisation.applied;
     if ((k + 1) % 100 == 0) {
       std::printf("  keyframe %zu: %zu objects, p95 of the last 100 %.1f ms, %.0f MB\n", k + 1,
                   r.objects.size(), p95(total_ms, k + 1 - 100, k + 1), rss_mb.back());
@@ -258,7 +261,8 @@ int main(int argc, char** argv) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   // The final map against each table's objects (placed in the map).
-  std::printf("final map: %zu objects\n", final.objects.size());
+  std::printf("final map: %zu objects; the camera relocalised against the map %d times\n",
+              final.objects.size(), relocalisations);
   for (int t = 0; t < o.tables; ++t) {
     ClutterScene placed = scenes[static_cast<std::size_t>(t)];
     for (auto& obj : placed.objects) obj.T_world_obj = tablePlacement(t) * obj.T_world_obj;

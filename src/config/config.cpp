@@ -31,6 +31,7 @@ class Table {
     monitor();
     association();
     lifecycle();
+    relocalisation();
     stageOne();
     relations();
     stageTwo();
@@ -401,6 +402,28 @@ class Table {
     add("relations.gravity", Type::kVector3, -kInf, kInf,
         "gravity direction in the map (= odom) frame, [x, y, z] (normalised)",
         [](GeoFusionConfig& c) { return &c.estimator.gravity; });
+  }
+  void relocalisation() {
+    auto f = [](GeoFusionConfig& c) { return &c.estimator.relocalisation; };
+    flag("relocalisation.enabled",
+         "GeoFusion: on a revisit, the camera corrected against the map before association",
+         [f](GeoFusionConfig& c) { return &f(c)->enabled; });
+    real("relocalisation.inlier_m", 0.001, 1,
+         "a detection is on a mapped object of its class within this, m",
+         [f](GeoFusionConfig& c) { return &f(c)->inlier_m; });
+    integer("relocalisation.min_inliers", 2, 1000,
+            "a correction needs this many detections on objects",
+            [f](GeoFusionConfig& c) { return &f(c)->min_inliers; });
+    real("relocalisation.max_share_on_map", 0, 1,
+         "searched only when fewer than this share of the detections are on objects uncorrected",
+         [f](GeoFusionConfig& c) { return &f(c)->max_share_on_map; });
+    real("relocalisation.min_gain", 1, 100,
+         "applied when it brings this many times the detections onto objects (plus one)",
+         [f](GeoFusionConfig& c) { return &f(c)->min_gain; });
+    real("relocalisation.max_translation_m", 0, 100, "larger corrections refused, m",
+         [f](GeoFusionConfig& c) { return &f(c)->max_translation_m; });
+    real("relocalisation.max_rotation_deg", 0, 180, "larger corrections refused, deg",
+         [f](GeoFusionConfig& c) { return &f(c)->max_rotation_deg; });
   }
   void stageTwo() {
     auto f = [](GeoFusionConfig& c) { return &c.estimator.stage_two; };

@@ -275,7 +275,9 @@ DepthRefinement DepthRefiner::refine(const std::shared_ptr<const ObjectModel>& m
     out.outcome = RefinementOutcome::kNotConverged;
     return out;
   }
-  const ConsistencyResult refined = scorer_->score(model, T, depth, K);
+  // Scored from the first rendering, moved (one render a detection).
+  const ConsistencyResult refined =
+      compareMovedDepth(*rendered, T * T_cam_obj.inverse(), depth, K, scorer_->config());
   if (!refined.determined || !(refined.r_in > out.before.r_in + config_.min_inlier_gain)) {
     out.outcome = RefinementOutcome::kNoImprovement;
     return out;

@@ -61,7 +61,7 @@ MethodStages stagesOf(Method method) {
     case Method::kGeoFusion:
       s.geometric_consistency = s.false_positive_removal = true;
       s.stage_one = s.relations_and_stage_two = s.depth_refinement = true;
-      s.stage_one_noise_adaptation = s.free_space_removal = true;
+      s.stage_one_noise_adaptation = s.free_space_removal = s.relocalisation = true;
       break;
   }
   return s;
@@ -142,6 +142,7 @@ bool SceneEstimator::resume(const std::vector<ObjectEstimate>& objects,
 
 void SceneEstimator::reset() {
   T_map_odom_start_ = Eigen::Isometry3d::Identity();
+  T_odom_fix_ = Eigen::Isometry3d::Identity();
   tracks_.clear();
   T_map_cam_.clear();
   T_odom_cam_.clear();
@@ -158,7 +159,8 @@ void SceneEstimator::reset() {
 
 Eigen::Isometry3d SceneEstimator::T_map_odom() const {
   if (T_map_cam_.empty()) return Eigen::Isometry3d::Identity();
-  return T_map_cam_.back() * T_odom_cam_.back().inverse();
+  // The odometry kept is T_odom_fix_ x the robot's: map -> the robot's odom frame.
+  return T_map_cam_.back() * T_odom_cam_.back().inverse() * T_odom_fix_;
 }
 
 const Eigen::Isometry3d& SceneEstimator::reportedPose(const Track& track) const {
@@ -241,6 +243,8 @@ KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
   timings.consistency_ms = msSince(t0);
 
   t0 = Clock::now();
+  Relocalisation relocalisation;
+  if (stages_.relocalisation) relocalisation = relocaliseCamera(detections);
   std::vector<int> started;
   std::vector<int> detection_object = stages_.map_is_keyframe_detections
                                           ? mapKeyframeDetections(kf, detections, t)
@@ -276,6 +280,7 @@ KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
   out.detection_warning = monitor_.add(out.detections);
   out.removed_ids = std::move(removed);
   out.skipped_detections = detections.skipped;
+  out.relocalisation = relocalisation;
   out.stage_one = stage_one;
   out.stage_two = stage_two;
   timings.total_ms = msSince(start);
@@ -286,12 +291,37 @@ KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
 // The camera pose of a new keyframe: chained from the previous estimate by the odometry increment.
 Eigen::Isometry3d SceneEstimator::appendCameraPose(const Keyframe& kf) {
   const Eigen::Isometry3d T_map_cam =
-      T_map_cam_.empty() ? T_map_odom_start_ * kf.T_odom_cam
-                         : T_map_cam_.back() * (T_odom_cam_.back().inverse() * kf.T_odom_cam);
+      T_map_cam_.empty()
+          ? T_map_odom_start_ * kf.T_odom_cam
+          : T_map_cam_.back() * (T_odom_cam_.back().inverse() * T_odom_fix_ * kf.T_odom_cam);
   T_map_cam_.push_back(T_map_cam);
-  T_odom_cam_.push_back(kf.T_odom_cam);
+  T_odom_cam_.push_back(T_odom_fix_ * kf.T_odom_cam);
   stamps_.push_back(kf.stamp_s);
   return T_map_cam;
+}
+
+// Relocalisation (relocalisation.h): the keyframe's detections against the map's objects; a
+// correction moves this keyframe's camera, so that its detections associate with the objects
+// they see, and replaces the odometry increment into it (the drive that drifted) by the
+// corrected one: the odometry kept from here on is T_odom_fix_ x the robot's.
+Relocalisation SceneEstimator::relocaliseCamera(const ScoredDetections& detections) {
+  std::vector<LabelledPoint> seen, mapped;
+  const Eigen::Isometry3d& T_map_cam = T_map_cam_.back();
+  for (int k : detections.usable) {
+    const std::size_t i = static_cast<std::size_t>(k);
+    seen.push_back({detections.models[i]->name, (T_map_cam * detections.pose(i)).translation()});
+  }
+  for (std::size_t j : reportedTracks())
+    mapped.push_back({tracks_[j].model->name, reportedPose(tracks_[j]).translation()});
+  const Relocalisation r = relocalise(seen, mapped, config_.gravity, config_.relocalisation);
+  if (!r.applied) return r;
+  const std::size_t t = T_map_cam_.size() - 1;
+  if (t == 0) return r;  // nothing was mapped before the first keyframe
+  const Eigen::Isometry3d robot_odom = T_odom_fix_.inverse() * T_odom_cam_[t];
+  T_map_cam_[t] = r.T_correction * T_map_cam_[t];
+  T_odom_cam_[t] = T_odom_cam_[t - 1] * (T_map_cam_[t - 1].inverse() * T_map_cam_[t]);
+  T_odom_fix_ = T_odom_cam_[t] * robot_odom.inverse();
+  return r;
 }
 
 // Usable detections (known class, enough score, finite pose), depth-refined when the method

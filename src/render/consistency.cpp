@@ -27,42 +27,31 @@ ConsistencyResult undeterminedResult(const ConsistencyConfig& config) {
   return r;
 }
 
-ConsistencyResult compareDepth(const RenderedImages& rendered, const DepthImageView& observed,
-                               const PinholeIntrinsics& K, const ConsistencyConfig& config) {
-  ConsistencyResult r;
-  const PixelBox& box = rendered.region;
-  const int stride = std::max(1, config.pixel_stride);
-  const bool inside = observed.data && box.valid() && box.x >= 0 && box.y >= 0 &&
-                      box.x + box.width <= observed.width &&
-                      box.y + box.height <= observed.height &&
-                      rendered.depth.size() == static_cast<std::size_t>(box.area());
-  if (inside) {
-    for (int y = 0; y < box.height; y += stride) {
-      const int v = box.y + y;
-      const float* row = rendered.depth.data() + static_cast<std::size_t>(y) * box.width;
-      for (int x = 0; x < box.width; x += stride) {
-        const float z_model = row[x];
-        if (!(z_model > 0.f)) continue;
-        ++r.rendered;
-        const int u = box.x + x;
-        const float z_obs = observed.at(u, v);
-        if (!(z_obs > 0.f) || !std::isfinite(z_obs)) {
-          ++r.missing;
-          continue;
-        }
-        const double along = distanceAlongRay(K, u, v, z_obs, z_model);
-        if (along < -config.eps_res) {
-          ++r.occluded;
-        } else if (along <= config.eps_res) {
-          ++r.inliers;
-        } else if (along > config.eps_out) {
-          ++r.outliers;
-        } else {
-          ++r.uncertain;
-        }
-      }
-    }
+namespace {
+
+// One rendered point at pixel (u, v), depth z_model, against the observation there.
+void classifyPoint(const DepthImageView& observed, const PinholeIntrinsics& K, int u, int v,
+                   float z_model, const ConsistencyConfig& config, ConsistencyResult* r) {
+  ++r->rendered;
+  const float z_obs = observed.at(u, v);
+  if (!(z_obs > 0.f) || !std::isfinite(z_obs)) {
+    ++r->missing;
+    return;
   }
+  const double along = distanceAlongRay(K, u, v, z_obs, z_model);
+  if (along < -config.eps_res) {
+    ++r->occluded;
+  } else if (along <= config.eps_res) {
+    ++r->inliers;
+  } else if (along > config.eps_out) {
+    ++r->outliers;
+  } else {
+    ++r->uncertain;
+  }
+}
+
+// The ratios and f_gc of the counted points.
+ConsistencyResult scoreCounts(ConsistencyResult r, const ConsistencyConfig& config) {
   const int observed_points = r.rendered - r.missing;
   if (observed_points < std::max(1, config.min_points)) {
     r.score = config.undetermined_score;
@@ -77,6 +66,54 @@ ConsistencyResult compareDepth(const RenderedImages& rendered, const DepthImageV
   r.r_out = visible > 0 ? static_cast<double>(r.outliers) / visible : 0.0;
   r.score = config.inlier(r.r_in) * config.outlier(1.0 - r.r_out) * config.occlusion(1.0 - r.r_occ);
   return r;
+}
+
+}  // namespace
+
+ConsistencyResult compareDepth(const RenderedImages& rendered, const DepthImageView& observed,
+                               const PinholeIntrinsics& K, const ConsistencyConfig& config) {
+  ConsistencyResult r;
+  const PixelBox& box = rendered.region;
+  const int stride = std::max(1, config.pixel_stride);
+  const bool inside = observed.data && box.valid() && box.x >= 0 && box.y >= 0 &&
+                      box.x + box.width <= observed.width &&
+                      box.y + box.height <= observed.height &&
+                      rendered.depth.size() == static_cast<std::size_t>(box.area());
+  if (inside) {
+    for (int y = 0; y < box.height; y += stride) {
+      const float* row = rendered.depth.data() + static_cast<std::size_t>(y) * box.width;
+      for (int x = 0; x < box.width; x += stride) {
+        if (row[x] > 0.f) classifyPoint(observed, K, box.x + x, box.y + y, row[x], config, &r);
+      }
+    }
+  }
+  return scoreCounts(r, config);
+}
+
+ConsistencyResult compareMovedDepth(const RenderedImages& rendered,
+                                    const Eigen::Isometry3d& T_delta,
+                                    const DepthImageView& observed, const PinholeIntrinsics& K,
+                                    const ConsistencyConfig& config) {
+  ConsistencyResult r;
+  const PixelBox& box = rendered.region;
+  const int stride = std::max(1, config.pixel_stride);
+  if (!observed.data || !box.valid() ||
+      rendered.depth.size() != static_cast<std::size_t>(box.area()))
+    return scoreCounts(r, config);
+  for (int y = 0; y < box.height; y += stride) {
+    const float* row = rendered.depth.data() + static_cast<std::size_t>(y) * box.width;
+    for (int x = 0; x < box.width; x += stride) {
+      if (!(row[x] > 0.f)) continue;
+      const Eigen::Vector3d p = T_delta * K.backProject(box.x + x, box.y + y, row[x]);
+      if (!(p.z() > 0.0)) continue;
+      const Eigen::Vector2d uv = K.project(p);
+      const int u = static_cast<int>(std::lround(uv.x())),
+                v = static_cast<int>(std::lround(uv.y()));
+      if (u < 0 || v < 0 || u >= observed.width || v >= observed.height) continue;
+      classifyPoint(observed, K, u, v, static_cast<float>(p.z()), config, &r);
+    }
+  }
+  return scoreCounts(r, config);
 }
 
 ConsistencyScorer::ConsistencyScorer(std::shared_ptr<OffscreenRenderer> renderer,

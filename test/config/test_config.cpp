@@ -97,7 +97,7 @@ visual_odometry:
   EXPECT_DOUBLE_EQ(c.estimator.association.eps_new, AssociationConfig().eps_new);
   const std::string diff = configDiff(c);
   EXPECT_NE(diff.find("association.eps_fp: 0.4 (default 0.55)"), std::string::npos) << diff;
-  EXPECT_NE(diff.find("stage_one.window_keyframes: 42 (default 60)"), std::string::npos) << diff;
+  EXPECT_NE(diff.find("stage_one.window_keyframes: 42 (default 30)"), std::string::npos) << diff;
 }
 
 TEST(Config, UnknownKeysAreWarnedWithTheNearestKnownKey) {

@@ -32,13 +32,13 @@ struct StageOneConfig {
   int every_n_keyframes = 10;  ///< run every N keyframes (the paper: 10)
   /// Only the latest N keyframe poses are free (older ones fixed, their measurements still
   /// constrain the objects); 0 = all. Bounds the time of a run on long sequences.
-  int window_keyframes = 60;
+  int window_keyframes = 30;
   /// Outside the window, marginalise instead of keeping: the cameras older than the window's
   /// anchor leave the problem, and their measurements (absolute measurements of the objects, the
   /// cameras being fixed) are folded into one prior per object (FoldedMeasurements); the noise
   /// adaptation looks at the window only. The fixed window's answer at a cost that depends on
   /// the window and the objects in view, not on the length of the run (issue 22).
-  bool marginalise_outside_window = false;
+  bool marginalise_outside_window = true;
   /// Noise adaptation (GeoFusion; variance component estimation from the residuals of each
   /// solve, used by the next): the odometry's variance scaled by a factor in
   /// [min_odometry_variance_factor, 1] (tighter only), each object's measurement variance by a

@@ -13,6 +13,7 @@
 #include "geofusion/estimation/detection_monitor.h"
 #include "geofusion/estimation/optimization.h"
 #include "geofusion/estimation/relations.h"
+#include "geofusion/estimation/relocalisation.h"
 #include "geofusion/model/object_model.h"
 #include "geofusion/render/consistency.h"
 
@@ -57,6 +58,7 @@ struct MethodStages {
   bool stage_one = false;                   ///< camera and object poses in the factor graph
   bool stage_one_noise_adaptation = false;  ///< noise scales from the residuals (not the paper)
   bool free_space_removal = false;          ///< objects the depth shows gone are removed
+  bool relocalisation = false;              ///< the camera corrected against the map on revisits
   bool relations_and_stage_two = false;     ///< contacts and stage II (reported poses: stage II)
 };
 MethodStages stagesOf(Method method);
@@ -89,6 +91,7 @@ struct EstimatorConfig {
   ContactConfig contacts;
   SupportPlaneConfig support_plane;
   StageTwoConfig stage_two;
+  RelocalisationConfig relocalisation;  ///< GeoFusion: the camera against the map on revisits
   Eigen::Vector3d gravity = -Eigen::Vector3d::UnitZ();  ///< in the map (= odom) frame
   double min_detection_score = 0.0;                     ///< detections below are ignored
 };
@@ -186,7 +189,9 @@ struct KeyframeResult {
   /// cause (DetectionMonitor); empty when not.
   std::string detection_warning;
   int skipped_detections = 0;  ///< unknown class or below min score
-  StageReport stage_one;       ///< a failed stage's result is not used
+  /// Whether the chained camera was corrected against the map before association, and by what.
+  Relocalisation relocalisation;
+  StageReport stage_one;  ///< a failed stage's result is not used
   StageReport stage_two;
   StageTimings timings;
 };
@@ -267,6 +272,7 @@ class SceneEstimator {
   };
 
   Eigen::Isometry3d appendCameraPose(const Keyframe& keyframe);
+  Relocalisation relocaliseCamera(const ScoredDetections& detections);
   ScoredDetections scoreDetections(const Keyframe& keyframe) const;
   std::vector<DetectionReport> reportDetections(const Keyframe& keyframe,
                                                 const ScoredDetections& detections,
@@ -323,6 +329,9 @@ class SceneEstimator {
   double odometry_variance_ = 1.0;  ///< stage I odometry variance factor (noise adaptation)
   std::vector<double> stamps_;
   Eigen::Isometry3d T_map_odom_start_ = Eigen::Isometry3d::Identity();  ///< resume()
+  /// T_odom_cam_ = T_odom_fix_ x the robot's odometry: relocalisations replace the increments
+  /// they correct.
+  Eigen::Isometry3d T_odom_fix_ = Eigen::Isometry3d::Identity();
   SupportPlane support_;
   std::shared_ptr<ObjectModel> support_model_;
   Eigen::Isometry3d T_map_support_ = Eigen::Isometry3d::Identity();

@@ -82,6 +82,15 @@ inline double distanceAlongRay(const PinholeIntrinsics& K, double u, double v, d
 ConsistencyResult compareDepth(const RenderedImages& rendered, const DepthImageView& observed,
                                const PinholeIntrinsics& K, const ConsistencyConfig& config);
 
+/// compareDepth() of the same model moved by `T_delta` (camera frame: new pose = T_delta x the
+/// rendered one) without rendering it again: each rendered point is moved and projected, and
+/// compared where it lands (the surface seen stays the one rendered: for the small corrections
+/// of a depth refinement, a few millimetres to centimetres, self-occlusion hardly changes).
+ConsistencyResult compareMovedDepth(const RenderedImages& rendered,
+                                    const Eigen::Isometry3d& T_delta,
+                                    const DepthImageView& observed, const PinholeIntrinsics& K,
+                                    const ConsistencyConfig& config);
+
 /// Renders models at measured poses (restricted to their image region) and scores them. Keeps
 /// one mesh upload per model for its lifetime. Not for concurrent use from several threads.
 class ConsistencyScorer {
