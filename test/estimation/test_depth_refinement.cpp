@@ -151,18 +151,9 @@ TEST_F(DepthRefinementTest, AStreamBiasedAlongTheRayIsReportedUnlessRefined) {
     SceneEstimator estimator(models, config, test::sharedRenderer());
     KeyframeResult last;
     for (int t = 0; t < 12; ++t) {
-      Keyframe kf;
-      kf.stamp_s = t;
-      kf.T_odom_cam = scene.T_world_cam();
-      kf.K = scene.K();
-      kf.depth = scene.depth();
-      for (int i = 0; i < 4; ++i) {
-        ObjectMeasurement m;
-        m.class_name = scene.object(i).model->name;
-        m.score = 0.9;
-        m.T_cam_obj = offRay(scene.cameraPose(i), along, Eigen::Vector3d::UnitX(), 0.0);
-        kf.detections.push_back(m);
-      }
+      Keyframe kf = scene.keyframe(t, {0, 1, 2, 3});
+      for (ObjectMeasurement& m : kf.detections)
+        m.T_cam_obj = offRay(m.T_cam_obj, along, Eigen::Vector3d::UnitX(), 0.0);
       last = estimator.addKeyframe(kf);
     }
     return last;

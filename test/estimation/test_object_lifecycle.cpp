@@ -31,19 +31,7 @@ class ObjectLifecycleTest : public ::testing::Test {
 
   // One keyframe from the fixed camera, the listed objects detected at their true poses.
   KeyframeResult step(const std::vector<int>& detected) {
-    Keyframe kf;
-    kf.stamp_s = t++;
-    kf.T_odom_cam = scene.T_world_cam();
-    kf.K = scene.K();
-    kf.depth = scene.depth();
-    for (int i : detected) {
-      ObjectMeasurement m;
-      m.class_name = scene.object(i).model->name;
-      m.score = 0.9;
-      m.T_cam_obj = scene.cameraPose(i);
-      kf.detections.push_back(m);
-    }
-    return estimator->addKeyframe(kf);
+    return estimator->addKeyframe(scene.keyframe(t++, detected));
   }
 
   // The map has an object of object i's class within 2 cm of `T_world` (the map frame is the

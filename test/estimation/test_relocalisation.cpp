@@ -84,22 +84,10 @@ TEST(Relocalisation, ARevisitMeasuresTheMappedObjects) {
     KeyframeResult r;
     *relocalised = 0;
     for (int t = 0; t < 24; ++t) {
-      Keyframe kf;
-      kf.stamp_s = t;
       // From keyframe 12 on, the odometry is off by the drift of a drive.
       const Eigen::Isometry3d drift =
           t < 12 ? Eigen::Isometry3d::Identity() : headingShift(5.0, Eigen::Vector3d(0.1, 0.06, 0));
-      kf.T_odom_cam = drift * scene.T_world_cam();
-      kf.K = scene.K();
-      kf.depth = scene.depth();
-      for (int i = 0; i < 6; ++i) {
-        ObjectMeasurement m;
-        m.class_name = scene.object(i).model->name;
-        m.score = 0.9;
-        m.T_cam_obj = scene.cameraPose(i);
-        kf.detections.push_back(m);
-      }
-      r = estimator.addKeyframe(kf);
+      r = estimator.addKeyframe(scene.keyframe(t, {0, 1, 2, 3, 4, 5}, drift));
       *relocalised += r.relocalisation.applied;
     }
     return r;

@@ -3,6 +3,7 @@
 // Shared by the consistency and depth refinement tests.
 #pragma once
 
+#include "geofusion/estimation/scene_estimator.h"
 #include "geofusion/model/object_model.h"
 #include "geofusion/render/consistency.h"
 #include "geofusion/render/renderer.h"
@@ -46,6 +47,25 @@ class TableScene {
     table_.mesh = makeBox(Eigen::Vector3d(1.2, 0.8, 0.04));
     table_handle_ = sharedRenderer()->addMesh(table_.mesh);
     T_world_cam_ = lookAt(Eigen::Vector3d(0.0, -0.66, 0.46), Eigen::Vector3d(0.0, 0.0, 0.06));
+  }
+
+  /// A keyframe from the camera with the observed depth, the `detected` objects reported at
+  /// their true poses (score 0.9), the odometry reading `T_odom_world` x the true camera.
+  Keyframe keyframe(double stamp, const std::vector<int>& detected,
+                    const Eigen::Isometry3d& T_odom_world = Eigen::Isometry3d::Identity()) const {
+    Keyframe kf;
+    kf.stamp_s = stamp;
+    kf.T_odom_cam = T_odom_world * T_world_cam_;
+    kf.K = K_;
+    kf.depth = depth();
+    for (int i : detected) {
+      ObjectMeasurement m;
+      m.class_name = objects_[static_cast<std::size_t>(i)].model->name;
+      m.score = 0.9;
+      m.T_cam_obj = cameraPose(i);
+      kf.detections.push_back(m);
+    }
+    return kf;
   }
 
   std::shared_ptr<const ObjectModel> model(const std::string& name) const {
