@@ -326,9 +326,15 @@ StageOneSummary optimizeStageOne(std::vector<Eigen::Isometry3d>* T_map_cam,
     }
     Eigen::Vector3d axis;
     const bool free = freeAxis(models[j], &axis);
+    // The folded rotations' equivalent nearest the object's estimate (it may have settled on
+    // another one since they were folded; the chordal mean commutes with the symmetries).
+    Eigen::Isometry3d mean = past.mean();
+    if (models[j])
+      mean.linear() =
+          closestSymmetricEquivalent(models[j]->symmetry, (*T_map_obj)[j].linear(), mean.linear());
     auto* prior =
         new ceres::AutoDiffCostFunction<RelativePoseFactor, 6, 7, 7>(new RelativePoseFactor(
-            past.mean(), past.translationSqrtInformation(), past.rotationWeight(), free, axis));
+            mean, past.translationSqrtInformation(), past.rotationWeight(), free, axis));
     problem.AddResidualBlock(prior, nullptr, identity.data(), objs[j].data());
   }
   // The anchor fixes the gauge; outside the window the cameras stay where they are.

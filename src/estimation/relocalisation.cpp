@@ -38,8 +38,12 @@ Eigen::Isometry3d headingAndTranslation(const std::vector<Eigen::Vector3d>& a,
   return R.inverse() * T_g * R;
 }
 
-bool withinBounds(const Eigen::Isometry3d& T, const RelocalisationConfig& config) {
-  return T.translation().norm() <= config.max_translation_m &&
+// The correction moves the detections (about `centre`) by at most the configured bounds; the
+// translation is measured there, not at the map's origin (a heading correction far from the
+// origin has a large translation part).
+bool withinBounds(const Eigen::Isometry3d& T, const Eigen::Vector3d& centre,
+                  const RelocalisationConfig& config) {
+  return (T * centre - centre).norm() <= config.max_translation_m &&
          Eigen::AngleAxisd(T.linear()).angle() <= config.max_rotation_deg * M_PI / 180.0;
 }
 
@@ -79,6 +83,9 @@ Relocalisation relocalise(const std::vector<LabelledPoint>& detections,
     return out;
   out.tried = true;
   const Eigen::Matrix3d R_g = gravityFrame(gravity);
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (const LabelledPoint& d : detections) centre += d.position;
+  centre /= static_cast<double>(detections.size());
   // Hypotheses from two correspondences of the same classes whose spacing agrees.
   Eigen::Isometry3d best = identity;
   int best_inliers = out.inliers_before, hypotheses = 0;
@@ -98,7 +105,7 @@ Relocalisation relocalise(const std::vector<LabelledPoint>& detections,
           const Eigen::Isometry3d T =
               headingAndTranslation({detections[i].position, detections[k].position},
                                     {objects[a].position, objects[b].position}, R_g);
-          if (!withinBounds(T, config)) continue;
+          if (!withinBounds(T, centre, config)) continue;
           const int inliers = detectionsOnMap(detections, objects, T, config.inlier_m);
           if (inliers > best_inliers) best_inliers = inliers, best = T;
         }
@@ -116,7 +123,7 @@ Relocalisation relocalise(const std::vector<LabelledPoint>& detections,
   }
   const Eigen::Isometry3d refined = headingAndTranslation(from, to, R_g);
   const int refined_inliers = detectionsOnMap(detections, objects, refined, config.inlier_m);
-  if (refined_inliers >= best_inliers && withinBounds(refined, config))
+  if (refined_inliers >= best_inliers && withinBounds(refined, centre, config))
     best = refined, best_inliers = refined_inliers;
   if (best_inliers < config.min_inliers ||
       best_inliers < config.min_gain * out.inliers_before + 1.0)

@@ -316,7 +316,10 @@ Relocalisation SceneEstimator::relocaliseCamera(const ScoredDetections& detectio
   const Relocalisation r = relocalise(seen, mapped, config_.gravity, config_.relocalisation);
   if (!r.applied) return r;
   const std::size_t t = T_map_cam_.size() - 1;
-  if (t == 0) return r;  // nothing was mapped before the first keyframe
+  if (t == 0) {  // a resumed map: the first camera is placed through it
+    T_map_cam_[0] = r.T_correction * T_map_cam_[0];
+    return r;
+  }
   const Eigen::Isometry3d robot_odom = T_odom_fix_.inverse() * T_odom_cam_[t];
   T_map_cam_[t] = r.T_correction * T_map_cam_[t];
   T_odom_cam_[t] = T_odom_cam_[t - 1] * (T_map_cam_[t - 1].inverse() * T_map_cam_[t]);
@@ -708,7 +711,7 @@ void SceneEstimator::adaptNoise(const std::vector<std::size_t>& reported,
 
 bool SceneEstimator::recentlySeen(const Track& track) const {
   const int window = config_.stage_two.local_map_keyframes;
-  return window <= 0 || track.last_keyframe >= static_cast<int>(T_map_cam_.size()) - 1 - window;
+  return window <= 0 || track.last_keyframe >= static_cast<int>(T_map_cam_.size()) - window;
 }
 
 std::vector<std::size_t> SceneEstimator::localMap(const std::vector<std::size_t>& reported,
@@ -776,10 +779,11 @@ StageReport SceneEstimator::runRelationsAndStageTwo(const Keyframe* kf, StageTim
     c.object_a = local_id(c.object_a), c.object_b = local_id(c.object_b);
     by_id.push_back(c);
   }
-  for (const FeatureContact& c : contacts_by_id_) {  // kept: no end in the local map, both exist
-    if ((c.object_a >= 0 && local_of_id.count(c.object_a)) ||
-        (c.object_b >= 0 && local_of_id.count(c.object_b)) || !reported_of_id.count(c.object_a) ||
-        !reported_of_id.count(c.object_b))
+  // Kept: the contacts the relations could not find again (an end outside the local map; the
+  // support is in it) between objects that still exist.
+  for (const FeatureContact& c : contacts_by_id_) {
+    const bool found_again = local_of_id.count(c.object_a) && local_of_id.count(c.object_b);
+    if (found_again || !reported_of_id.count(c.object_a) || !reported_of_id.count(c.object_b))
       continue;
     by_id.push_back(c);
   }

@@ -55,6 +55,20 @@ TEST(Relocalisation, DriftedDetectionsAreBroughtBackOntoTheMap) {
   EXPECT_LT(error.translation().norm(), 0.01);
   EXPECT_LT(Eigen::AngleAxisd(error.linear()).angle(), 0.3 * M_PI / 180.0);
 
+  // The same table 20 m from the map's origin: the correction's translation there is large
+  // (a heading turn about the origin), what it moves the detections by is not.
+  std::vector<LabelledPoint> far_map = map, far_detections;
+  const Eigen::Isometry3d far = headingShift(0.0, Eigen::Vector3d(20.0, 5.0, 0.0));
+  for (LabelledPoint& p : far_map) p.position = far * p.position;
+  const Eigen::Isometry3d far_drift = far * drift * far.inverse();
+  for (const LabelledPoint& d : detections)
+    far_detections.push_back({d.class_name, far_drift * far * drift.inverse() * d.position});
+  const Relocalisation far_r = relocalise(far_detections, far_map, -Eigen::Vector3d::UnitZ(), {});
+  ASSERT_TRUE(far_r.applied);
+  EXPECT_GT(far_r.T_correction.translation().norm(), 1.0);
+  const Eigen::Vector3d table = far * Eigen::Vector3d(0, 0, 0.8);  // undone where it matters
+  EXPECT_LT((far_r.T_correction * far_drift * table - table).norm(), 0.01);
+
   // Without drift nothing is searched; a table of other objects is not matched.
   std::vector<LabelledPoint> on_map;
   for (const LabelledPoint& p : map) on_map.push_back(p);

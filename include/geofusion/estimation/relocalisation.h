@@ -28,7 +28,8 @@ struct RelocalisationConfig {
   /// ... and is applied only when it brings at least this many times the detections onto
   /// objects that no correction does (plus one).
   double min_gain = 2.0;
-  /// Corrections beyond these are refused (not a drift: a wrong match), metres and degrees.
+  /// Corrections beyond these are refused (not a drift: a wrong match), metres (how far the
+  /// detections' centre moves) and degrees.
   double max_translation_m = 1.0;
   double max_rotation_deg = 30.0;
 };
