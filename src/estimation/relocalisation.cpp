@@ -61,8 +61,7 @@ int nearestObject(const LabelledPoint& d, const std::vector<LabelledPoint>& obje
   return best;
 }
 
-}  // namespace
-
+// Detections on objects of their class (within `inlier_m`) after moving them by `T`.
 int detectionsOnMap(const std::vector<LabelledPoint>& detections,
                     const std::vector<LabelledPoint>& objects, const Eigen::Isometry3d& T,
                     double inlier_m) {
@@ -70,6 +69,8 @@ int detectionsOnMap(const std::vector<LabelledPoint>& detections,
   for (const LabelledPoint& d : detections) n += nearestObject(d, objects, T, inlier_m) >= 0;
   return n;
 }
+
+}  // namespace
 
 Relocalisation relocalise(const std::vector<LabelledPoint>& detections,
                           const std::vector<LabelledPoint>& objects, const Eigen::Vector3d& gravity,

@@ -159,6 +159,7 @@ void SceneEstimatorNode::onFrame(const sensor_msgs::ImageConstPtr& /*rgb*/,
     ++keyframes_;
     last_ = result;
     reportFailedStages(result);
+    reportRelocalisation(result);
     if (!result.detection_warning.empty())
       ROS_WARN_STREAM_THROTTLE(10.0, "geofusion: " << result.detection_warning);
     if (pipeline_->lastCapped() > 0)
@@ -263,6 +264,19 @@ void SceneEstimatorNode::reportFailedStages(const KeyframeResult& result) {
                                                 << "; its result is not used (" << failed_stages_
                                                 << " failed stages so far)");
   }
+}
+
+// A relocalisation (map -> odom jumps by its correction) is said and counted for diagnostics.
+void SceneEstimatorNode::reportRelocalisation(const KeyframeResult& result) {
+  const Relocalisation& r = result.relocalisation;
+  if (!r.applied) return;
+  ++relocalisations_;
+  ROS_INFO_STREAM("geofusion: keyframe "
+                  << result.keyframe << " relocalised against the map: " << r.inliers_after
+                  << " detections on mapped objects (" << r.inliers_before
+                  << " before), map -> odom corrected by "
+                  << 100.0 * r.T_correction.translation().norm() << " cm, "
+                  << Eigen::AngleAxisd(r.T_correction.linear()).angle() * 180.0 / M_PI << " deg");
 }
 
 void SceneEstimatorNode::publish(const KeyframeResult& result, const std_msgs::Header& header) {
@@ -419,6 +433,7 @@ void SceneEstimatorNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   status.add("last keyframe: stage I", toString(last_.stage_one.status));
   status.add("last keyframe: stage II", toString(last_.stage_two.status));
   status.add("failed optimisation stages", failed_stages_);
+  status.add("relocalisations", relocalisations_);
   status.add("last keyframe ms: consistency", t.consistency_ms);
   status.add("last keyframe ms: association", t.association_ms);
   status.add("last keyframe ms: lifecycle", t.lifecycle_ms);

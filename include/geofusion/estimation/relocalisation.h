@@ -48,11 +48,6 @@ struct Relocalisation {
   Eigen::Isometry3d T_correction = Eigen::Isometry3d::Identity();
 };
 
-/// Detections on objects of their class (within `inlier_m`) after moving them by `T`.
-int detectionsOnMap(const std::vector<LabelledPoint>& detections,
-                    const std::vector<LabelledPoint>& objects, const Eigen::Isometry3d& T,
-                    double inlier_m);
-
 /// The correction (rotation about `gravity` and translation) that brings the most detections
 /// onto map objects of their class; see RelocalisationConfig for when one is accepted.
 Relocalisation relocalise(const std::vector<LabelledPoint>& detections,

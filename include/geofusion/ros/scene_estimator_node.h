@@ -46,6 +46,7 @@ class SceneEstimatorNode {
   EstimatorPipeline::CameraPose cameraPose(const geofusion::DetectionArray& dets);
   void warnDropped(const sensor_msgs::Image& depth, const geofusion::DetectionArray& dets);
   void reportFailedStages(const KeyframeResult& result);
+  void reportRelocalisation(const KeyframeResult& result);
   void publish(const KeyframeResult& result, const std_msgs::Header& header);
   void broadcastCorrection(const ros::Time& stamp);
   void broadcastObjects(const KeyframeResult& result, const std_msgs::Header& header);
@@ -72,7 +73,8 @@ class SceneEstimatorNode {
   std::unique_ptr<EstimatorPipeline> pipeline_;
   KeyframeResult last_;
   std::size_t keyframes_ = 0;
-  std::size_t failed_stages_ = 0;  // optimisation stages whose result was not used
+  std::size_t failed_stages_ = 0;    // optimisation stages whose result was not used
+  std::size_t relocalisations_ = 0;  // keyframes whose camera was relocalised against the map
 
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
