@@ -23,10 +23,52 @@ KEYFRAMES = 30
 OUT = os.environ.get('GEOFUSION_SCREENSHOT_DIR', '/tmp')
 
 
-def screenshot(name):
-    path = os.path.join(OUT, name)
-    util.subprocess.check_call(['import', '-window', 'root', path])
-    return path, matplotlib.image.imread(path)[:, :, :3]
+RVIZ_WINDOW_TIMEOUT_S = 90
+
+
+def screenshot(name, out=OUT):
+    """The whole virtual display as an RGB array (PNG24: ImageMagick writes a screen of few
+    colours, e.g. Xvfb's bare black-and-white root, as a grey-level PNG otherwise)."""
+    path = os.path.join(out, name)
+    util.subprocess.check_call(['import', '-window', 'root', 'PNG24:' + path])
+    image = matplotlib.image.imread(path)
+    if image.ndim == 2:
+        image = numpy.stack([image] * 3, axis=2)
+    return path, image[:, :, :3]
+
+
+def colours(image):
+    return len(numpy.unique((image * 255).astype(numpy.uint8).reshape(-1, 3), axis=0))
+
+
+def wait_for_rviz_window(timeout_s, scratch):
+    """Polls the display until rviz's window is drawn on it (the bare Xvfb root has two
+    colours, rviz's panels and 3D view hundreds); the last screenshot's colour count."""
+    deadline = time.time() + timeout_s
+    count = 0
+    while time.time() < deadline:
+        _, image = screenshot('rviz_startup.png', scratch)
+        count = colours(image)
+        if count > 50:
+            return count
+        time.sleep(1.0)
+    return count
+
+
+def chromatic(image):
+    """Pixels in colour: rviz's grey window has a few thousand (icons), a drawn map far more."""
+    return int(numpy.count_nonzero(image.max(axis=2) - image.min(axis=2) > 0.1))
+
+
+def screenshot_when(name, condition, timeout_s):
+    """Screenshots until `condition(image)` holds (rviz draws at its own pace under a software
+    renderer on a busy machine) or time runs out; the last one."""
+    deadline = time.time() + timeout_s
+    while True:
+        path, image = screenshot(name)
+        if condition(image) or time.time() > deadline:
+            return path, image
+        time.sleep(1.0)
 
 
 def highlighted(before, after):
@@ -60,13 +102,21 @@ class RvizScreenshotTest(unittest.TestCase):
                                             ['/scene_estimator/object_map',
                                              '/geofusion_panel/selection'], timeout_s=60),
                         'the estimator or the rviz map panel did not come up')
+        drawn = wait_for_rviz_window(RVIZ_WINDOW_TIMEOUT_S, self.dir)
+        self.assertGreater(drawn, 50, 'rviz drew no window on the virtual display in %d s (%d '
+                           'colours on screen; rviz alive: %s)' % (
+                               RVIZ_WINDOW_TIMEOUT_S, drawn, util.subprocess.call(
+                                   ['rosnode', 'ping', '-c', '1', '/rviz'],
+                                   stdout=util.subprocess.DEVNULL) == 0))
         time.sleep(2.0)
         util.play(bag, rate=1.0)
         time.sleep(4.0)  # rviz draws the last map
         with self.lock:
             final = self.maps[-1]
         self.assertGreater(len(final.objects), 5)
-        scene_path, scene = screenshot('rviz_scene.png')
+        scene_path, scene = screenshot_when('rviz_scene.png', lambda im: chromatic(im) > 50000,
+                                            timeout_s=30)
+        self.assertGreater(chromatic(scene), 50000, 'rviz did not draw the map in colour')
 
         # The object with the most contacts with other objects (the highest of them: the top of
         # a stack shows from rviz's raised view), selected through the panel.
@@ -96,7 +146,8 @@ class RvizScreenshotTest(unittest.TestCase):
         texts = [m.text for m in highlight.markers if m.type == Marker.TEXT_VIEW_FACING]
         self.assertTrue(all('(' in t for t in texts), texts)
         time.sleep(3.0)
-        selected_path, selected = screenshot('rviz_selected.png')
+        selected_path, selected = screenshot_when(
+            'rviz_selected.png', lambda im: highlighted(scene, im) > 1000, timeout_s=30)
 
         self.assertEqual(scene.shape, selected.shape)
         self.assertGreater(float(numpy.std(scene)), 0.05, 'the scene screenshot is blank')
