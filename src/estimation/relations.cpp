@@ -8,6 +8,7 @@
 #include <pcl/point_types.h>
 #include <pcl/sample_consensus/method_types.h>
 #include <pcl/sample_consensus/model_types.h>
+#include <pcl/sample_consensus/sac_model_plane.h>
 #include <pcl/segmentation/sac_segmentation.h>
 
 #include <algorithm>
@@ -15,13 +16,14 @@
 
 namespace geofusion {
 
-SupportPlane estimateSupportPlane(const DepthImageView& depth, const PinholeIntrinsics& K,
-                                  const Eigen::Isometry3d& T_map_cam,
-                                  const Eigen::Vector3d& gravity,
-                                  const SupportPlaneConfig& config) {
-  SupportPlane out;
-  if (!depth.data || depth.width != K.width || depth.height != K.height || !K.valid()) return out;
-  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
+namespace {
+
+using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+
+// The keyframe's depth points within range, in the map frame, every pixel_stride-th row/column.
+Cloud::Ptr mapPoints(const DepthImageView& depth, const PinholeIntrinsics& K,
+                     const Eigen::Isometry3d& T_map_cam, const SupportPlaneConfig& config) {
+  Cloud::Ptr cloud(new Cloud);
   const int stride = std::max(1, config.pixel_stride);
   for (int v = 0; v < K.height; v += stride) {
     for (int u = 0; u < K.width; u += stride) {
@@ -32,8 +34,18 @@ SupportPlane estimateSupportPlane(const DepthImageView& depth, const PinholeIntr
                                      static_cast<float>(p.z())));
     }
   }
-  if (static_cast<int>(cloud->size()) < config.min_inliers) return out;
-  const Eigen::Vector3d up = -gravity.normalized();
+  return cloud;
+}
+
+// A plane n . p + d = 0 with its inliers.
+struct PlaneFit {
+  Eigen::Vector4f coefficients = Eigen::Vector4f::Zero();
+  std::vector<int> inliers;
+};
+
+// The dominant plane within max_tilt of horizontal: RANSAC (PCL SACSegmentation).
+PlaneFit searchPlane(const Cloud::Ptr& cloud, const Eigen::Vector3d& up,
+                     const SupportPlaneConfig& config) {
   pcl::SACSegmentation<pcl::PointXYZ> seg;
   seg.setOptimizeCoefficients(true);
   seg.setModelType(pcl::SACMODEL_PERPENDICULAR_PLANE);
@@ -46,16 +58,47 @@ SupportPlane estimateSupportPlane(const DepthImageView& depth, const PinholeIntr
   pcl::PointIndices inliers;
   pcl::ModelCoefficients coefficients;
   seg.segment(inliers, coefficients);
-  if (static_cast<int>(inliers.indices.size()) < config.min_inliers ||
-      coefficients.values.size() != 4) {
-    return out;
-  }
-  Eigen::Vector3d n(coefficients.values[0], coefficients.values[1], coefficients.values[2]);
-  double d = coefficients.values[3];
+  PlaneFit fit;
+  if (coefficients.values.size() != 4) return fit;
+  fit.coefficients = Eigen::Vector4f(coefficients.values.data());
+  fit.inliers = std::move(inliers.indices);
+  return fit;
+}
+
+// The known plane followed into this keyframe: the points within distance_threshold of it, the
+// least-squares plane through them (PCL's plane model), its inliers. No RANSAC: the plane of the
+// previous keyframes is the hypothesis.
+PlaneFit followPlane(const Cloud::Ptr& cloud, const SupportPlane& known,
+                     const SupportPlaneConfig& config) {
+  pcl::SampleConsensusModelPlane<pcl::PointXYZ> model(cloud);
+  const Eigen::Vector4f prior(
+      static_cast<float>(known.normal.x()), static_cast<float>(known.normal.y()),
+      static_cast<float>(known.normal.z()), static_cast<float>(-known.height));
+  PlaneFit fit;
+  std::vector<int> near;
+  model.selectWithinDistance(prior, config.distance_threshold_m, near);
+  if (static_cast<int>(near.size()) < std::max(3, config.min_inliers)) return fit;
+  Eigen::VectorXf refined;
+  model.optimizeModelCoefficients(near, prior, refined);
+  if (refined.size() != 4 || !refined.allFinite()) return fit;
+  fit.coefficients = refined;
+  model.selectWithinDistance(refined, config.distance_threshold_m, fit.inliers);
+  return fit;
+}
+
+// The support plane of a fit: normal up and within max_tilt of it, in-plane axes, the inliers'
+// extent. Invalid with too few inliers or too much tilt.
+SupportPlane supportPlaneOf(const PlaneFit& fit, const Cloud& cloud, const Eigen::Vector3d& up,
+                            const SupportPlaneConfig& config) {
+  SupportPlane out;
+  if (static_cast<int>(fit.inliers.size()) < config.min_inliers) return out;
+  Eigen::Vector3d n = fit.coefficients.head<3>().cast<double>();
+  double d = fit.coefficients[3];
   const double norm = n.norm();
   if (!(norm > 0.0)) return out;
   n /= norm, d /= norm;
   if (n.dot(up) < 0) n = -n, d = -d;
+  if (n.dot(up) < std::cos(config.max_tilt_deg * M_PI / 180.0)) return out;
   out.normal = n;
   out.height = -d;  // n . p + d = 0  =>  n . p = -d
   // In-plane axes: x along the map x projected on the plane.
@@ -65,19 +108,37 @@ SupportPlane estimateSupportPlane(const DepthImageView& depth, const PinholeIntr
   const Eigen::Vector3d ay = n.cross(ax);
   out.axes.col(0) = ax, out.axes.col(1) = ay, out.axes.col(2) = n;
   Eigen::Vector2d lo(1e9, 1e9), hi(-1e9, -1e9);
-  for (int i : inliers.indices) {
+  for (int i : fit.inliers) {
     const Eigen::Vector3d p =
-        cloud->points[static_cast<std::size_t>(i)].getVector3fMap().cast<double>();
+        cloud.points[static_cast<std::size_t>(i)].getVector3fMap().cast<double>();
     const Eigen::Vector2d q(p.dot(ax), p.dot(ay));
     lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
   }
   const Eigen::Vector2d mid = 0.5 * (lo + hi);
   out.size = hi - lo;
   out.centre = ax * mid.x() + ay * mid.y() + n * out.height;
-  out.inliers = static_cast<int>(inliers.indices.size());
+  out.inliers = static_cast<int>(fit.inliers.size());
   out.observations = 1;
   out.valid = true;
   return out;
+}
+
+}  // namespace
+
+SupportPlane estimateSupportPlane(const DepthImageView& depth, const PinholeIntrinsics& K,
+                                  const Eigen::Isometry3d& T_map_cam,
+                                  const Eigen::Vector3d& gravity, const SupportPlaneConfig& config,
+                                  const SupportPlane* known) {
+  if (!depth.data || depth.width != K.width || depth.height != K.height || !K.valid()) return {};
+  const Cloud::Ptr cloud = mapPoints(depth, K, T_map_cam, config);
+  if (static_cast<int>(cloud->size()) < config.min_inliers) return {};
+  const Eigen::Vector3d up = -gravity.normalized();
+  if (known && known->valid) {
+    const SupportPlane followed =
+        supportPlaneOf(followPlane(cloud, *known, config), *cloud, up, config);
+    if (followed.valid) return followed;
+  }
+  return supportPlaneOf(searchPlane(cloud, up, config), *cloud, up, config);
 }
 
 void fuseSupportPlane(const SupportPlane& observed, SupportPlane* fused,

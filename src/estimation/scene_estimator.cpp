@@ -740,7 +740,7 @@ std::vector<std::size_t> SceneEstimator::localMap(const std::vector<std::size_t>
 void SceneEstimator::updateSupportPlane(const Keyframe& kf) {
   if (!kf.depth.data) return;
   fuseSupportPlane(estimateSupportPlane(kf.depth, kf.K, T_map_cam_.back(), config_.gravity,
-                                        config_.support_plane),
+                                        config_.support_plane, &support_),
                    &support_);
   if (support_.valid)
     support_model_ =

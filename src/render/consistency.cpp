@@ -29,26 +29,46 @@ ConsistencyResult undeterminedResult(const ConsistencyConfig& config) {
 
 namespace {
 
-// One rendered point at pixel (u, v), depth z_model, against the observation there.
-void classifyPoint(const DepthImageView& observed, const PinholeIntrinsics& K, int u, int v,
-                   float z_model, const ConsistencyConfig& config, ConsistencyResult* r) {
-  ++r->rendered;
-  const float z_obs = observed.at(u, v);
-  if (!(z_obs > 0.f) || !std::isfinite(z_obs)) {
-    ++r->missing;
-    return;
+// Classifies rendered points against the observation by their distance along the ray
+// (distanceAlongRay), compared squared: no square root or division a pixel.
+class PointClassifier {
+ public:
+  PointClassifier(const DepthImageView& observed, const PinholeIntrinsics& K,
+                  const ConsistencyConfig& config)
+      : observed_(observed),
+        K_(K),
+        inv_fx_(1.0 / K.fx),
+        inv_fy_(1.0 / K.fy),
+        eps_res2_(config.eps_res * config.eps_res),
+        eps_out2_(config.eps_out * config.eps_out) {}
+
+  // One rendered point at pixel (u, v), depth z_model, against the observation there.
+  void classify(int u, int v, float z_model, ConsistencyResult* r) const {
+    ++r->rendered;
+    const float z_obs = observed_.at(u, v);
+    if (!(z_obs > 0.f) || !std::isfinite(z_obs)) {
+      ++r->missing;
+      return;
+    }
+    const double rx = (u - K_.cx) * inv_fx_, ry = (v - K_.cy) * inv_fy_;
+    const double dz = static_cast<double>(z_obs) - z_model;
+    const double along2 = dz * dz * (1.0 + rx * rx + ry * ry);  // distanceAlongRay squared
+    if (along2 <= eps_res2_) {
+      ++r->inliers;
+    } else if (dz < 0.0) {
+      ++r->occluded;
+    } else if (along2 > eps_out2_) {
+      ++r->outliers;
+    } else {
+      ++r->uncertain;
+    }
   }
-  const double along = distanceAlongRay(K, u, v, z_obs, z_model);
-  if (along < -config.eps_res) {
-    ++r->occluded;
-  } else if (along <= config.eps_res) {
-    ++r->inliers;
-  } else if (along > config.eps_out) {
-    ++r->outliers;
-  } else {
-    ++r->uncertain;
-  }
-}
+
+ private:
+  const DepthImageView& observed_;
+  const PinholeIntrinsics& K_;
+  const double inv_fx_, inv_fy_, eps_res2_, eps_out2_;
+};
 
 // The ratios and f_gc of the counted points.
 ConsistencyResult scoreCounts(ConsistencyResult r, const ConsistencyConfig& config) {
@@ -80,10 +100,11 @@ ConsistencyResult compareDepth(const RenderedImages& rendered, const DepthImageV
                       box.y + box.height <= observed.height &&
                       rendered.depth.size() == static_cast<std::size_t>(box.area());
   if (inside) {
+    const PointClassifier classifier(observed, K, config);
     for (int y = 0; y < box.height; y += stride) {
       const float* row = rendered.depth.data() + static_cast<std::size_t>(y) * box.width;
       for (int x = 0; x < box.width; x += stride) {
-        if (row[x] > 0.f) classifyPoint(observed, K, box.x + x, box.y + y, row[x], config, &r);
+        if (row[x] > 0.f) classifier.classify(box.x + x, box.y + y, row[x], &r);
       }
     }
   }
@@ -100,6 +121,7 @@ ConsistencyResult compareMovedDepth(const RenderedImages& rendered,
   if (!observed.data || !box.valid() ||
       rendered.depth.size() != static_cast<std::size_t>(box.area()))
     return scoreCounts(r, config);
+  const PointClassifier classifier(observed, K, config);
   for (int y = 0; y < box.height; y += stride) {
     const float* row = rendered.depth.data() + static_cast<std::size_t>(y) * box.width;
     for (int x = 0; x < box.width; x += stride) {
@@ -110,7 +132,7 @@ ConsistencyResult compareMovedDepth(const RenderedImages& rendered,
       const int u = static_cast<int>(std::lround(uv.x())),
                 v = static_cast<int>(std::lround(uv.y()));
       if (u < 0 || v < 0 || u >= observed.width || v >= observed.height) continue;
-      classifyPoint(observed, K, u, v, static_cast<float>(p.z()), config, &r);
+      classifier.classify(u, v, static_cast<float>(p.z()), &r);
     }
   }
   return scoreCounts(r, config);

@@ -406,6 +406,45 @@ TEST(Relations, SupportPlaneFromRenderedDepth) {
       estimateSupportPlane({empty.data(), K.width, K.height}, K, T_map_cam, kGravity).valid);
 }
 
+TEST(Relations, AKnownSupportPlaneIsFollowedOrSearchedAgain) {
+  OffscreenRenderer renderer;
+  ASSERT_TRUE(renderer.ok());
+  const MeshHandle table = renderer.addMesh(makeBox(Eigen::Vector3d(1.2, 0.8, 0.04)));
+  const MeshHandle box = renderer.addMesh(makeBox(Eigen::Vector3d(0.1, 0.1, 0.2)));
+  const PinholeIntrinsics K;
+  const Eigen::Isometry3d T_map_cam = lookAt(Eigen::Vector3d(-0.9, 0.1, 1.35),
+                                             Eigen::Vector3d(0, 0, 0.75), Eigen::Vector3d::UnitZ());
+  const Eigen::Isometry3d T_cam_map = T_map_cam.inverse();
+  RenderedImages out;
+  renderer.render(K, {{table, T_cam_map * at(0, 0, 0.73), 1}, {box, T_cam_map * at(0, 0, 0.85), 2}},
+                  &out, PixelBox{}, OffscreenRenderer::kDepth);
+  const DepthImageView depth{out.depth.data(), K.width, K.height};
+  const SupportPlane searched = estimateSupportPlane(depth, K, T_map_cam, kGravity);
+  ASSERT_TRUE(searched.valid);
+
+  // A known plane 6 mm high and tilted by half a degree: followed onto the table's top.
+  SupportPlane known = searched;
+  known.height += 0.006;
+  known.normal = Eigen::AngleAxisd(0.5 * M_PI / 180.0, Eigen::Vector3d::UnitX()) * known.normal;
+  const SupportPlane followed =
+      estimateSupportPlane(depth, K, T_map_cam, kGravity, SupportPlaneConfig(), &known);
+  ASSERT_TRUE(followed.valid);
+  EXPECT_NEAR(followed.height, 0.75, 0.002);
+  EXPECT_GT(followed.normal.z(), 0.9999);
+  EXPECT_NEAR(followed.inliers, searched.inliers, 0.02 * searched.inliers);
+  EXPECT_NEAR(followed.size.x(), searched.size.x(), 0.02);
+
+  // Known planes with too few points near them (the floor, the box's small top): searched again.
+  for (double height : {0.0, 0.95}) {
+    known = searched;
+    known.height = height;
+    const SupportPlane again =
+        estimateSupportPlane(depth, K, T_map_cam, kGravity, SupportPlaneConfig(), &known);
+    ASSERT_TRUE(again.valid) << height;
+    EXPECT_NEAR(again.height, 0.75, 0.003) << height;
+  }
+}
+
 TEST(Relations, NearbyButNotTouchingGivesNothing) {
   const Ground ground;
   const ObjectModel box = boxModel(0.1, 0.1, 0.1);

@@ -39,11 +39,15 @@ struct SupportPlane {
 };
 
 /// The dominant plane within max_tilt of horizontal among the keyframe's depth points (in the map
-/// frame through T_map_cam), by PCL SACSegmentation. Invalid when there is none.
+/// frame through T_map_cam), by PCL SACSegmentation (RANSAC). With a `known` valid plane (the
+/// fused one of earlier keyframes) it is followed instead: the least-squares plane through the
+/// points near it, by PCL's plane model, when they are at least min_inliers (RANSAC otherwise,
+/// e.g. at another table). Invalid when there is none.
 SupportPlane estimateSupportPlane(const DepthImageView& depth, const PinholeIntrinsics& K,
                                   const Eigen::Isometry3d& T_map_cam,
                                   const Eigen::Vector3d& gravity,
-                                  const SupportPlaneConfig& config = SupportPlaneConfig());
+                                  const SupportPlaneConfig& config = SupportPlaneConfig(),
+                                  const SupportPlane* known = nullptr);
 
 /// Fuses a new estimate into a running one (inlier-weighted height, union of the extents). An
 /// estimate more than `max_height_difference_m` away is another surface: it replaces the fused
