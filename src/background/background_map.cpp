@@ -127,11 +127,10 @@ void BackgroundMap::carve(const std::vector<MaskObject>& objects) {
   octomap::OcTree& tree = impl_->tree;
   for (const MaskObject& o : objects) {
     if (!o.model) continue;
-    Eigen::Vector3f lo, hi;
-    o.model->mesh.bounds(&lo, &hi);
-    const Eigen::Vector3d centre = (0.5f * (lo + hi)).cast<double>();
+    const Eigen::AlignedBox3f box = boxOf(*o.model);
+    const Eigen::Vector3d centre = box.center().cast<double>();
     const Eigen::Vector3d half =
-        (0.5f * (hi - lo)).cast<double>() + Eigen::Vector3d::Constant(config_.object_margin_m);
+        (0.5f * box.diagonal()).cast<double>() + Eigen::Vector3d::Constant(config_.object_margin_m);
     Eigen::Vector3d box_lo = Eigen::Vector3d::Constant(1e9), box_hi = -box_lo;
     for (int k = 0; k < 8; ++k) {
       const Eigen::Vector3d corner(k & 1 ? half.x() : -half.x(), k & 2 ? half.y() : -half.y(),

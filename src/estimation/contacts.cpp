@@ -333,10 +333,9 @@ std::vector<FeatureContact> findAllContacts(const std::vector<PosedModel>& objec
   std::vector<double> radius(objects.size(), 0.0);
   for (std::size_t i = 0; i < objects.size(); ++i) {
     if (!objects[i].model) continue;
-    Eigen::Vector3f lo, hi;
-    objects[i].model->mesh.bounds(&lo, &hi);
-    centre[i] = objects[i].T_world_obj * (0.5f * (lo + hi)).cast<double>();
-    radius[i] = 0.5 * static_cast<double>((hi - lo).norm());
+    const Eigen::AlignedBox3f box = boxOf(*objects[i].model);
+    centre[i] = objects[i].T_world_obj * box.center().cast<double>();
+    radius[i] = 0.5 * static_cast<double>(box.diagonal().norm());
   }
   std::vector<FeatureContact> out;
   const double reach = std::max(

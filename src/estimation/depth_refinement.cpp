@@ -102,8 +102,8 @@ double alongRay(const Eigen::Vector3d& p, const DepthImageView& depth, const Pin
   const double nan = std::numeric_limits<double>::quiet_NaN();
   if (!(p.z() > 0.01)) return nan;
   const Eigen::Vector2d uv = K.project(p);
-  const int u = static_cast<int>(std::lround(uv.x())), v = static_cast<int>(std::lround(uv.y()));
-  if (u < 0 || v < 0 || u >= depth.width || v >= depth.height) return nan;
+  int u, v;
+  if (!K.nearestPixel(uv, &u, &v) || u >= depth.width || v >= depth.height) return nan;
   const float z = depth.at(u, v);
   if (!(z > 0.f) || !std::isfinite(z)) return nan;
   if (observed) *observed = K.backProject(u, v, z);

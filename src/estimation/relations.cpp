@@ -190,6 +190,7 @@ std::shared_ptr<ObjectModel> supportPlaneModel(const SupportPlane& plane,
                              thickness_m);
   model->mesh = makeBox(size);
   model->extents = size.cast<float>();
+  model->box = Eigen::AlignedBox3f(-0.5f * model->extents, 0.5f * model->extents);
   // Only the top face matters for contacts: one plane feature, outward normal +z.
   PlaneFeature top;
   top.center = Eigen::Vector3d(0, 0, 0.5 * thickness_m);

@@ -483,10 +483,9 @@ SceneEstimator::Track& SceneEstimator::startTrack(const std::shared_ptr<const Ob
   tr.model = model;
   tr.T_stage_one = tr.T_refined = T_map_obj;
   tr.first_keyframe = t;
-  Eigen::Vector3f lo, hi;
-  tr.model->mesh.bounds(&lo, &hi);
-  tr.box_centre = (0.5f * (lo + hi)).cast<double>();
-  tr.box_half = (0.5f * (hi - lo)).cast<double>();
+  const Eigen::AlignedBox3f box = boxOf(*tr.model);
+  tr.box_centre = box.center().cast<double>();
+  tr.box_half = (0.5f * box.diagonal()).cast<double>();
   tracks_.push_back(tr);
   return tracks_.back();
 }

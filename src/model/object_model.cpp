@@ -87,8 +87,16 @@ TriangleMesh collisionHull(const TriangleMesh& mesh) {
   return convexHull(simplifyMesh(mesh, 400, 0.002).vertices);
 }
 
+Eigen::AlignedBox3f boxOf(const ObjectModel& model) {
+  if (!model.box.isEmpty()) return model.box;
+  Eigen::Vector3f lo, hi;
+  model.mesh.bounds(&lo, &hi);
+  return Eigen::AlignedBox3f(lo, hi);
+}
+
 void ModelSet::add(ObjectModel model, const SurfaceFeatureConfig& feature_config) {
   model.extents = model.mesh.extents();
+  if (!model.mesh.vertices.empty()) model.box = boxOf(model);
   if (model.points.empty()) model.points = sampleSurfacePoints(model.mesh, kSampledPoints);
   if (model.features.planes.empty() && model.features.curves.empty()) {
     model.features = extractSurfaceFeatures(model.mesh, feature_config);

@@ -128,10 +128,9 @@ ConsistencyResult compareMovedDepth(const RenderedImages& rendered,
       if (!(row[x] > 0.f)) continue;
       const Eigen::Vector3d p = T_delta * K.backProject(box.x + x, box.y + y, row[x]);
       if (!(p.z() > 0.0)) continue;
-      const Eigen::Vector2d uv = K.project(p);
-      const int u = static_cast<int>(std::lround(uv.x())),
-                v = static_cast<int>(std::lround(uv.y()));
-      if (u < 0 || v < 0 || u >= observed.width || v >= observed.height) continue;
+      int u, v;
+      if (!K.nearestPixel(K.project(p), &u, &v) || u >= observed.width || v >= observed.height)
+        continue;
       classifier.classify(u, v, static_cast<float>(p.z()), &r);
     }
   }

@@ -182,6 +182,72 @@ TEST(Consistency, MovedRenderingScoresLikeARenderingAtTheMovedPose) {
   EXPECT_NEAR(moved.score, rendered_true.score, 0.05);
 }
 
+TEST(Consistency, PointsAreClassedByTheirDistanceAlongTheRay) {
+  // A flat rendering at 1 m in the image's corner (rays up to 20 degrees off the axis) against
+  // observed depths placed at chosen distances along each pixel's ray, on both sides of eps_res
+  // and eps_out: every point lands in the class of its distance.
+  const PinholeIntrinsics K;
+  const ConsistencyConfig config;  // eps_res 1 cm, eps_out 2 cm
+  RenderedImages rendered;
+  rendered.region = PixelBox{520, 400, 120, 80};
+  rendered.depth.assign(static_cast<std::size_t>(rendered.region.area()), 1.f);
+  std::vector<float> observed(static_cast<std::size_t>(K.width * K.height), 0.f);
+  const std::vector<double> along = {-0.05,  -0.0105, -0.0095, 0.0,    0.0095,
+                                     0.0105, 0.015,   0.0195,  0.0205, 0.08};
+  ConsistencyResult expected;
+  int k = 0;
+  for (int v = rendered.region.y; v < rendered.region.y + rendered.region.height; ++v) {
+    for (int u = rendered.region.x; u < rendered.region.x + rendered.region.width; ++u, ++k) {
+      ++expected.rendered;
+      if (k % 11 == 10) {
+        ++expected.missing;
+        continue;
+      }
+      const double a = along[static_cast<std::size_t>(k % 11)];
+      const double ray = std::hypot(1.0, (u - K.cx) / K.fx, (v - K.cy) / K.fy);
+      observed[static_cast<std::size_t>(v * K.width + u)] = static_cast<float>(1.0 + a / ray);
+      ASSERT_NEAR(distanceAlongRay(K, u, v, 1.0 + a / ray, 1.0), a, 1e-9);
+      if (a < -config.eps_res)
+        ++expected.occluded;
+      else if (a <= config.eps_res)
+        ++expected.inliers;
+      else if (a > config.eps_out)
+        ++expected.outliers;
+      else
+        ++expected.uncertain;
+    }
+  }
+  const DepthImageView view{observed.data(), K.width, K.height};
+  for (const ConsistencyResult& r :
+       {compareDepth(rendered, view, K, config),
+        compareMovedDepth(rendered, Eigen::Isometry3d::Identity(), view, K, config)}) {
+    EXPECT_EQ(r.rendered, expected.rendered);
+    EXPECT_EQ(r.missing, expected.missing);
+    EXPECT_EQ(r.occluded, expected.occluded);
+    EXPECT_EQ(r.inliers, expected.inliers);
+    EXPECT_EQ(r.outliers, expected.outliers);
+    EXPECT_EQ(r.uncertain, expected.uncertain);
+  }
+}
+
+TEST(Camera, NearestPixelRoundsAndStaysInTheImage) {
+  const PinholeIntrinsics K;  // 640 x 480
+  int u = -1, v = -1;
+  EXPECT_TRUE(K.nearestPixel({-0.49, 0.49}, &u, &v));
+  EXPECT_EQ(u, 0);
+  EXPECT_EQ(v, 0);
+  EXPECT_TRUE(K.nearestPixel({12.5, 7.51}, &u, &v));
+  EXPECT_EQ(u, 13);
+  EXPECT_EQ(v, 8);
+  EXPECT_TRUE(K.nearestPixel({639.49, 479.49}, &u, &v));
+  EXPECT_EQ(u, 639);
+  EXPECT_EQ(v, 479);
+  EXPECT_FALSE(K.nearestPixel({-0.51, 10.0}, &u, &v));
+  EXPECT_FALSE(K.nearestPixel({639.5, 10.0}, &u, &v));
+  EXPECT_FALSE(K.nearestPixel({10.0, 479.5}, &u, &v));
+  EXPECT_FALSE(K.nearestPixel({std::nan(""), 10.0}, &u, &v));
+}
+
 TEST(Consistency, MissingDepthIsNeitherInlierNorOutlier) {
   const ModelSet models = ModelSet::builtinPrimitives();
   TableScene scene(models);

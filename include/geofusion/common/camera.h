@@ -31,6 +31,15 @@ struct PinholeIntrinsics {
   Eigen::Vector2d project(const Eigen::Vector3d& p) const {
     return {fx * p.x() / p.z() + cx, fy * p.y() / p.z() + cy};
   }
+  /// The pixel whose centre is nearest to continuous coordinates `uv`; false when that pixel is
+  /// outside the image (or uv is not finite).
+  bool nearestPixel(const Eigen::Vector2d& uv, int* u, int* v) const {
+    const double x = uv.x() + 0.5, y = uv.y() + 0.5;  // floor(x) rounds uv.x() for x >= 0
+    if (!(x >= 0.0 && y >= 0.0 && x < width && y < height)) return false;
+    *u = static_cast<int>(x);
+    *v = static_cast<int>(y);
+    return true;
+  }
   /// The point at depth `z` (along the optical axis) on the ray through pixel (u, v).
   Eigen::Vector3d backProject(double u, double v, double z) const {
     return {(u - cx) / fx * z, (v - cy) / fy * z, z};

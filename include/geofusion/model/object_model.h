@@ -29,9 +29,16 @@ struct ObjectModel {
   Symmetry symmetry;
   SurfaceFeatures features;
   Eigen::Vector3f extents = Eigen::Vector3f::Zero();  ///< axis-aligned size, metres
+  /// The mesh's axis-aligned box, model frame (ModelSet::add fills it; empty: boxOf measures the
+  /// mesh).
+  Eigen::AlignedBox3f box;
   /// Convex hull of a simplified mesh: the shape physics (Bullet) and collision checks (FCL) use.
   TriangleMesh collision_hull;
 };
+
+/// The model's axis-aligned box in the model frame: the stored one, or the mesh's when none is
+/// stored (a model built by hand).
+Eigen::AlignedBox3f boxOf(const ObjectModel& model);
 
 /// The convex collision hull ObjectModel::collision_hull holds (hull of a <= 400-triangle,
 /// <= 2 mm simplification of the mesh).
