@@ -122,14 +122,22 @@ ConsistencyResult compareMovedDepth(const RenderedImages& rendered,
       rendered.depth.size() != static_cast<std::size_t>(box.area()))
     return scoreCounts(r, config);
   const PointClassifier classifier(observed, K, config);
+  // The moved point of pixel (x, y) at depth z: z R ray(x, y) + t, with R ray linear in x.
+  const Eigen::Matrix3d& R = T_delta.linear();
+  const Eigen::Vector3d t = T_delta.translation();
+  const Eigen::Vector3d along_row = R.col(0) / K.fx;
   for (int y = 0; y < box.height; y += stride) {
     const float* row = rendered.depth.data() + static_cast<std::size_t>(y) * box.width;
+    const Eigen::Vector3d row_start =
+        R.col(0) * ((box.x - K.cx) / K.fx) + R.col(1) * ((box.y + y - K.cy) / K.fy) + R.col(2);
     for (int x = 0; x < box.width; x += stride) {
       if (!(row[x] > 0.f)) continue;
-      const Eigen::Vector3d p = T_delta * K.backProject(box.x + x, box.y + y, row[x]);
+      const Eigen::Vector3d p = static_cast<double>(row[x]) * (row_start + x * along_row) + t;
       if (!(p.z() > 0.0)) continue;
+      const double inv_z = 1.0 / p.z();
       int u, v;
-      if (!K.nearestPixel(K.project(p), &u, &v) || u >= observed.width || v >= observed.height)
+      if (!K.nearestPixel({K.fx * p.x() * inv_z + K.cx, K.fy * p.y() * inv_z + K.cy}, &u, &v) ||
+          u >= observed.width || v >= observed.height)
         continue;
       classifier.classify(u, v, static_cast<float>(p.z()), &r);
     }

@@ -44,7 +44,7 @@ struct ConsistencyConfig {
   int pixel_stride = 1;
   /// Models are rendered from a simplified copy of their mesh (meshoptimizer): at most this many
   /// triangles, unless that would move the surface by more than render_mesh_max_error_m.
-  int render_mesh_triangles = 500;
+  int render_mesh_triangles = 1500;
   double render_mesh_max_error_m = 0.001;
 };
 
