@@ -10,6 +10,7 @@
 // rasterises in the calling thread (one core) unless LP_NUM_THREADS says otherwise.
 #include "geofusion/common/statistics.h"
 #include "geofusion/estimation/depth_refinement.h"
+#include "geofusion/model/model_import.h"
 #include "geofusion/model/object_model.h"
 #include "geofusion/render/consistency.h"
 #include "model_set_option.h"
@@ -137,12 +138,13 @@ int main(int argc, char** argv) {
       pixels += res.rendered;
     }
   }
-  std::size_t render_triangles = 0;
+  std::size_t render_triangles = 0, one_sided = 0;
   for (const auto& m : objects) {
-    render_triangles +=
+    const TriangleMesh simplified =
         simplifyMesh(m->mesh, static_cast<std::size_t>(config.render_mesh_triangles),
-                     config.render_mesh_max_error_m)
-            .triangles.size();
+                     config.render_mesh_max_error_m);
+    render_triangles += simplified.triangles.size();
+    one_sided += checkWatertight(simplified).closedOutward();  // drawn without back faces
   }
   // How the score falls with pose error: mean over the 25 objects and 8 random directions.
   std::vector<std::pair<double, double>> curve;
@@ -190,6 +192,8 @@ int main(int argc, char** argv) {
   std::printf("  detections a round      %zu, rounds %d\n", objects.size(), rounds);
   std::printf("  triangles               %zu in the meshes, %zu rendered for scoring\n", triangles,
               full_frame ? triangles : render_triangles);
+  std::printf("  meshes drawn one-sided  %zu of %zu (closed, wound outward: back faces skipped)\n",
+              one_sided, objects.size());
   std::printf("  rendered points a score %.0f (mean)\n", static_cast<double>(pixels) / ms.size());
   std::printf("  mean score (1 cm, 3 deg) %.3f\n", sum_score / ms.size());
   std::printf("  ms a score              median %.3f  p95 %.3f  max %.3f\n", percentile(ms, 0.5),

@@ -53,18 +53,26 @@ std::vector<int> weldedIndices(const TriangleMesh& mesh, double tolerance) {
 WatertightCheck checkWatertight(const TriangleMesh& mesh) {
   const double tolerance = std::max(1e-7, 1e-5 * static_cast<double>(mesh.extents().norm()));
   const std::vector<int> welded = weldedIndices(mesh, tolerance);
-  std::map<std::pair<int, int>, int> uses;
+  std::map<std::pair<int, int>, std::pair<int, int>> uses;  // edge -> (uses a->b, uses b->a)
+  WatertightCheck check;
   for (const auto& t : mesh.triangles) {
     for (int k = 0; k < 3; ++k) {
       const int a = welded[t[k]], b = welded[t[(k + 1) % 3]];
-      if (a != b) ++uses[std::minmax(a, b)];
+      if (a == b) continue;
+      auto& use = uses[std::minmax(a, b)];
+      ++(a < b ? use.first : use.second);
     }
+    const Eigen::Vector3d p0 = mesh.vertices[t[0]].cast<double>(),
+                          p1 = mesh.vertices[t[1]].cast<double>(),
+                          p2 = mesh.vertices[t[2]].cast<double>();
+    check.signed_volume_m3 += p0.dot(p1.cross(p2)) / 6.0;
   }
-  WatertightCheck check;
   check.edges = uses.size();
-  for (const auto& [edge, n] : uses) {
+  for (const auto& [edge, use] : uses) {
+    const int n = use.first + use.second;
     if (n == 1) ++check.boundary_edges;
     if (n > 2) ++check.non_manifold_edges;
+    if (n == 2 && use.first != 1) ++check.misoriented_edges;
   }
   return check;
 }

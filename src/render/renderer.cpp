@@ -1,5 +1,7 @@
 #include "geofusion/render/renderer.h"
 
+#include "geofusion/model/model_import.h"
+
 #define GL_GLEXT_PROTOTYPES 1
 #include <GL/gl.h>
 #include <GL/glext.h>
@@ -39,7 +41,8 @@ struct GpuMesh {
   GLuint texture = 0;
   std::array<Eigen::Vector3d, 8> corners;  // bounding box, model frame
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-  double radius = 0.0;  // bounding sphere about `centre`
+  double radius = 0.0;           // bounding sphere about `centre`
+  bool cull_back_faces = false;  // closed and wound outward: back faces are never seen
 };
 
 std::vector<Eigen::Vector3f> vertexNormals(const TriangleMesh& mesh) {
@@ -106,6 +109,10 @@ struct OffscreenRenderer::Impl {
       } else {
         glColor3f(item.color.x(), item.color.y(), item.color.z());
       }
+      if (m.cull_back_faces)
+        glEnable(GL_CULL_FACE);
+      else
+        glDisable(GL_CULL_FACE);
       const bool use_texture = textured && m.texture != 0;
       if (use_texture) {
         glEnable(GL_TEXTURE_2D);
@@ -176,6 +183,7 @@ OffscreenRenderer::OffscreenRenderer(const Options& options) : impl_(std::make_u
   glDisable(GL_MULTISAMPLE);
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
+  glCullFace(GL_BACK);  // enabled for the meshes that are closed and wound outward
   glEnable(GL_SCISSOR_TEST);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
@@ -222,6 +230,12 @@ std::string OffscreenRenderer::error() const {
 std::size_t OffscreenRenderer::meshCount() const {
   std::lock_guard<std::mutex> lock(impl_->mutex);
   return impl_->meshes.size();
+}
+
+bool OffscreenRenderer::cullsBackFaces(MeshHandle mesh) const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return mesh >= 0 && static_cast<std::size_t>(mesh) < impl_->meshes.size() &&
+         impl_->meshes[static_cast<std::size_t>(mesh)].cull_back_faces;
 }
 
 MeshHandle OffscreenRenderer::addMesh(const TriangleMesh& mesh) {
@@ -304,6 +318,7 @@ MeshHandle OffscreenRenderer::addMesh(const TriangleMesh& mesh) {
   }
   m.centre = (0.5f * (lo + hi)).cast<double>();
   m.radius = 0.5 * static_cast<double>((hi - lo).norm());
+  m.cull_back_faces = checkWatertight(mesh).closedOutward();
   d.meshes.push_back(m);
   return static_cast<MeshHandle>(d.meshes.size() - 1);
 }

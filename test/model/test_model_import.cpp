@@ -64,6 +64,29 @@ TEST(ModelImport, HolesAndNonManifoldEdgesAreCounted) {
   EXPECT_EQ(checkWatertight(fin).non_manifold_edges, 3u);
 }
 
+TEST(ModelImport, WindingIsChecked) {
+  TriangleMesh box = makeBox({0.2, 0.1, 0.05});
+  WatertightCheck check = checkWatertight(box);
+  EXPECT_EQ(check.misoriented_edges, 0u);
+  EXPECT_NEAR(check.signed_volume_m3, 0.2 * 0.1 * 0.05, 1e-9);
+  EXPECT_TRUE(check.closedOutward());
+  std::swap(box.triangles[0][1], box.triangles[0][2]);  // one triangle wound the other way
+  check = checkWatertight(box);
+  EXPECT_TRUE(check.watertight());
+  EXPECT_EQ(check.misoriented_edges, 3u);
+  EXPECT_FALSE(check.closedOutward());
+  for (auto& t : box.triangles) std::swap(t[1], t[2]);  // all the other way: wound inward
+  check = checkWatertight(box);
+  EXPECT_EQ(check.misoriented_edges, 3u);
+  std::swap(box.triangles[0][1], box.triangles[0][2]);
+  check = checkWatertight(box);
+  EXPECT_EQ(check.misoriented_edges, 0u);
+  EXPECT_NEAR(check.signed_volume_m3, -0.2 * 0.1 * 0.05, 1e-9);
+  EXPECT_FALSE(check.closedOutward());
+  const TriangleMesh cylinder = makeCylinder(0.04, 0.1, 24);
+  EXPECT_TRUE(checkWatertight(cylinder).closedOutward());
+}
+
 TEST(ModelImport, PrimitivesShowTheirSymmetry) {
   const auto box = detectSymmetry(makeBox({0.2, 0.1, 0.05}));
   EXPECT_TRUE(sameSymmetry(

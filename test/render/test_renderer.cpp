@@ -238,6 +238,37 @@ TEST(Renderer, YcbTextureShowsUp) {
   EXPECT_GT(saturated, inside / 4);  // the cracker box is mostly red and yellow print
 }
 
+TEST(Renderer, ClosedMeshesSkipBackFacesOthersAreTwoSided) {
+  OffscreenRenderer& r = sharedRenderer();
+  const PinholeIntrinsics K;
+  const TriangleMesh closed = makeBox(Eigen::Vector3d(0.2, 0.2, 0.2));
+  TriangleMesh open = closed, flipped = closed;
+  open.triangles.clear();
+  for (const auto& t : closed.triangles) {  // without its -z face, the one facing the camera
+    const bool near_face = closed.vertices[t[0]].z() < 0 && closed.vertices[t[1]].z() < 0 &&
+                           closed.vertices[t[2]].z() < 0;
+    if (!near_face) open.triangles.push_back(t);
+  }
+  for (auto& t : flipped.triangles) std::swap(t[1], t[2]);
+  const MeshHandle h_closed = r.addMesh(closed), h_open = r.addMesh(open),
+                   h_flipped = r.addMesh(flipped);
+  ASSERT_GE(h_closed, 0);
+  ASSERT_GE(h_open, 0);
+  ASSERT_GE(h_flipped, 0);
+  EXPECT_TRUE(r.cullsBackFaces(h_closed));
+  EXPECT_FALSE(r.cullsBackFaces(h_open));
+  EXPECT_FALSE(r.cullsBackFaces(h_flipped));
+  // 1 m ahead: the near face at 0.9 m; through the missing face, the far inside wall at 1.1 m.
+  const Eigen::Isometry3d T = pose(Eigen::Vector3d(0.0, 0.0, 1.0));
+  const int u = 320, v = 240;
+  for (const auto& [mesh, expected] :
+       {std::pair<MeshHandle, double>{h_closed, 0.9}, {h_open, 1.1}, {h_flipped, 0.9}}) {
+    RenderedImages out;
+    ASSERT_TRUE(r.render(K, {{mesh, T, 1}}, &out, PixelBox{}, OffscreenRenderer::kDepth));
+    EXPECT_NEAR(out.depthAt(u, v), expected, 1e-3) << "mesh " << mesh;
+  }
+}
+
 TEST(Renderer, BadInputIsRefusedWithAReason) {
   OffscreenRenderer& r = sharedRenderer();
   const PinholeIntrinsics K;

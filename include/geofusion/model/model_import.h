@@ -32,7 +32,15 @@ struct WatertightCheck {
   std::size_t edges = 0;
   std::size_t boundary_edges = 0;      ///< used by one triangle: a hole
   std::size_t non_manifold_edges = 0;  ///< used by three or more triangles
+  /// Used by two triangles running it the same way: their windings disagree.
+  std::size_t misoriented_edges = 0;
+  double signed_volume_m3 = 0.0;  ///< positive when the triangles wind counter-clockwise outside
   bool watertight() const { return boundary_edges == 0 && non_manifold_edges == 0; }
+  /// Closed, consistently wound, and counter-clockwise seen from outside: its back faces are
+  /// never seen from outside, so a renderer may skip them.
+  bool closedOutward() const {
+    return watertight() && misoriented_edges == 0 && signed_volume_m3 > 0.0;
+  }
 };
 WatertightCheck checkWatertight(const TriangleMesh& mesh);
 

@@ -66,9 +66,13 @@ class OffscreenRenderer {
 
   /// Uploads a mesh (and its texture, read with OpenCV, when it has one; a texture that cannot
   /// be read is reported in error() and the mesh renders untextured). Returns -1 for an empty or
-  /// malformed mesh.
+  /// malformed mesh. A closed mesh wound counter-clockwise outside (checkWatertight) is drawn
+  /// with its back faces skipped (the same images, fewer triangles rasterised); any other mesh
+  /// is drawn two-sided.
   MeshHandle addMesh(const TriangleMesh& mesh);
   std::size_t meshCount() const;
+  /// Whether the mesh's back faces are skipped (closed and wound outward).
+  bool cullsBackFaces(MeshHandle mesh) const;
 
   /// The image region covered by the mesh's bounding box at this pose, grown by `margin` pixels
   /// and clipped to the image; invalid when the box is entirely behind the camera or outside.
