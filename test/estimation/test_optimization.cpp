@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <tuple>
 
 namespace geofusion {
 namespace {
@@ -377,19 +378,32 @@ TEST(StageTwo, ClampLeaningOnACanStaysInContactWithoutInterpenetration) {
   EXPECT_NEAR(poses[0].translation().z(), 0.80, 0.001);  // the can stays on the table
 }
 
-TEST(Relations, SupportPlaneFromRenderedDepth) {
+// The depth image of a table (top at 0.75 m) with a 10 x 10 x 20 cm box on it, seen from above
+// its edge.
+struct TableDepth {
+  PinholeIntrinsics K;
+  Eigen::Isometry3d T_map_cam = lookAt(Eigen::Vector3d(-0.9, 0.1, 1.35),
+                                       Eigen::Vector3d(0, 0, 0.75), Eigen::Vector3d::UnitZ());
+  RenderedImages out;
+  DepthImageView depth() const { return {out.depth.data(), K.width, K.height}; }
+};
+
+TableDepth renderTableWithBox() {
   OffscreenRenderer renderer;
-  ASSERT_TRUE(renderer.ok());
+  TableDepth scene;
   const MeshHandle table = renderer.addMesh(makeBox(Eigen::Vector3d(1.2, 0.8, 0.04)));
   const MeshHandle box = renderer.addMesh(makeBox(Eigen::Vector3d(0.1, 0.1, 0.2)));
-  const PinholeIntrinsics K;
-  const Eigen::Isometry3d T_map_cam = lookAt(Eigen::Vector3d(-0.9, 0.1, 1.35),
-                                             Eigen::Vector3d(0, 0, 0.75), Eigen::Vector3d::UnitZ());
-  const Eigen::Isometry3d T_cam_map = T_map_cam.inverse();
-  RenderedImages out;
-  renderer.render(K, {{table, T_cam_map * at(0, 0, 0.73), 1}, {box, T_cam_map * at(0, 0, 0.85), 2}},
-                  &out, PixelBox{}, OffscreenRenderer::kDepth);
-  const DepthImageView depth{out.depth.data(), K.width, K.height};
+  const Eigen::Isometry3d T_cam_map = scene.T_map_cam.inverse();
+  renderer.render(scene.K,
+                  {{table, T_cam_map * at(0, 0, 0.73), 1}, {box, T_cam_map * at(0, 0, 0.85), 2}},
+                  &scene.out, PixelBox{}, OffscreenRenderer::kDepth);
+  return scene;
+}
+
+TEST(Relations, SupportPlaneFromRenderedDepth) {
+  const TableDepth scene = renderTableWithBox();
+  const auto& [K, T_map_cam] = std::tie(scene.K, scene.T_map_cam);
+  const DepthImageView depth = scene.depth();
   const SupportPlane plane = estimateSupportPlane(depth, K, T_map_cam, kGravity);
   ASSERT_TRUE(plane.valid);
   EXPECT_NEAR(plane.height, 0.75, 0.003);
@@ -407,18 +421,9 @@ TEST(Relations, SupportPlaneFromRenderedDepth) {
 }
 
 TEST(Relations, AKnownSupportPlaneIsFollowedOrSearchedAgain) {
-  OffscreenRenderer renderer;
-  ASSERT_TRUE(renderer.ok());
-  const MeshHandle table = renderer.addMesh(makeBox(Eigen::Vector3d(1.2, 0.8, 0.04)));
-  const MeshHandle box = renderer.addMesh(makeBox(Eigen::Vector3d(0.1, 0.1, 0.2)));
-  const PinholeIntrinsics K;
-  const Eigen::Isometry3d T_map_cam = lookAt(Eigen::Vector3d(-0.9, 0.1, 1.35),
-                                             Eigen::Vector3d(0, 0, 0.75), Eigen::Vector3d::UnitZ());
-  const Eigen::Isometry3d T_cam_map = T_map_cam.inverse();
-  RenderedImages out;
-  renderer.render(K, {{table, T_cam_map * at(0, 0, 0.73), 1}, {box, T_cam_map * at(0, 0, 0.85), 2}},
-                  &out, PixelBox{}, OffscreenRenderer::kDepth);
-  const DepthImageView depth{out.depth.data(), K.width, K.height};
+  const TableDepth scene = renderTableWithBox();
+  const auto& [K, T_map_cam] = std::tie(scene.K, scene.T_map_cam);
+  const DepthImageView depth = scene.depth();
   const SupportPlane searched = estimateSupportPlane(depth, K, T_map_cam, kGravity);
   ASSERT_TRUE(searched.valid);
 
