@@ -397,6 +397,9 @@ class Table {
          [g](GeoFusionConfig& c) { return &g(c)->max_tilt_deg; });
     integer(q + "min_inliers", 3, 1000000, "fewer: no plane at this keyframe",
             [g](GeoFusionConfig& c) { return &g(c)->min_inliers; });
+    integer(q + "search_every_n_keyframes", 1, 100000,
+            "a known plane is followed; RANSAC for the dominant one every n-th keyframe",
+            [g](GeoFusionConfig& c) { return &g(c)->search_every_n_keyframes; });
     real(q + "thickness_m", 0.001, 1, "the grounded object: a slab this thick, m",
          [g](GeoFusionConfig& c) { return &g(c)->thickness_m; });
     add("relations.gravity", Type::kVector3, -kInf, kInf,

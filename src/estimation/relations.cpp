@@ -77,7 +77,7 @@ PlaneFit followPlane(const Cloud::Ptr& cloud, const SupportPlane& known,
   PlaneFit fit;
   std::vector<int> near;
   model.selectWithinDistance(prior, config.distance_threshold_m, near);
-  if (static_cast<int>(near.size()) < std::max(3, config.min_inliers)) return fit;
+  if (static_cast<int>(near.size()) < std::max(4, config.min_inliers)) return fit;
   Eigen::VectorXf refined;
   model.optimizeModelCoefficients(near, prior, refined);
   if (refined.size() != 4 || !refined.allFinite()) return fit;
@@ -136,7 +136,8 @@ SupportPlane estimateSupportPlane(const DepthImageView& depth, const PinholeIntr
   if (known && known->valid) {
     const SupportPlane followed =
         supportPlaneOf(followPlane(cloud, *known, config), *cloud, up, config);
-    if (followed.valid) return followed;
+    const int usual = known->inliers / std::max(1, known->observations);
+    if (followed.valid && 2 * followed.inliers >= usual) return followed;
   }
   return supportPlaneOf(searchPlane(cloud, up, config), *cloud, up, config);
 }

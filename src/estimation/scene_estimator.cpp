@@ -738,8 +738,13 @@ std::vector<std::size_t> SceneEstimator::localMap(const std::vector<std::size_t>
 
 void SceneEstimator::updateSupportPlane(const Keyframe& kf) {
   if (!kf.depth.data) return;
+  // Searched half-way through each period: not on the keyframes where stage I runs (every
+  // stage_one.every_n_keyframes-th, the same 10 by default), so the two costs do not add up.
+  const std::size_t n =
+      static_cast<std::size_t>(std::max(1, config_.support_plane.search_every_n_keyframes));
+  const bool search = T_map_cam_.size() % n == n / 2;
   fuseSupportPlane(estimateSupportPlane(kf.depth, kf.K, T_map_cam_.back(), config_.gravity,
-                                        config_.support_plane, &support_),
+                                        config_.support_plane, search ? nullptr : &support_),
                    &support_);
   if (support_.valid)
     support_model_ =

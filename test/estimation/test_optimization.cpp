@@ -450,6 +450,44 @@ TEST(Relations, AKnownSupportPlaneIsFollowedOrSearchedAgain) {
   }
 }
 
+TEST(Relations, AKnownTableIsFollowedWhereTheFloorDominates) {
+  // A small table over a floor that fills most of the view: RANSAC finds the floor, following
+  // the known table keeps the table; a known plane that used to have far more points than are
+  // near it now is searched for again.
+  OffscreenRenderer renderer;
+  const MeshHandle floor = renderer.addMesh(makeBox(Eigen::Vector3d(8.0, 8.0, 0.04)));
+  const MeshHandle table = renderer.addMesh(makeBox(Eigen::Vector3d(0.7, 0.5, 0.04)));
+  const PinholeIntrinsics K;
+  const Eigen::Isometry3d T_map_cam =
+      lookAt(Eigen::Vector3d(-1.2, 0.0, 1.6), Eigen::Vector3d(0, 0, 0.3), Eigen::Vector3d::UnitZ());
+  const Eigen::Isometry3d T_cam_map = T_map_cam.inverse();
+  RenderedImages out;
+  ASSERT_TRUE(renderer.render(
+      K, {{floor, T_cam_map * at(0, 0, -0.02), 1}, {table, T_cam_map * at(0, 0, 0.73), 2}}, &out,
+      PixelBox{}, OffscreenRenderer::kDepth));
+  const DepthImageView depth{out.depth.data(), K.width, K.height};
+  const SupportPlane searched = estimateSupportPlane(depth, K, T_map_cam, kGravity);
+  ASSERT_TRUE(searched.valid);
+  ASSERT_NEAR(searched.height, 0.0, 0.003);  // the scene is as meant: the floor dominates
+
+  SupportPlane known;
+  known.valid = true;
+  known.height = 0.745;
+  known.inliers = 1000;
+  known.observations = 1;
+  const SupportPlane followed =
+      estimateSupportPlane(depth, K, T_map_cam, kGravity, SupportPlaneConfig(), &known);
+  ASSERT_TRUE(followed.valid);
+  EXPECT_NEAR(followed.height, 0.75, 0.002);
+  EXPECT_GT(followed.inliers, SupportPlaneConfig().min_inliers);
+  EXPECT_LT(followed.inliers, searched.inliers);
+
+  known.inliers = 4 * followed.inliers;  // it used to have twice as many and more: search
+  EXPECT_NEAR(
+      estimateSupportPlane(depth, K, T_map_cam, kGravity, SupportPlaneConfig(), &known).height, 0.0,
+      0.003);
+}
+
 TEST(Relations, NearbyButNotTouchingGivesNothing) {
   const Ground ground;
   const ObjectModel box = boxModel(0.1, 0.1, 0.1);

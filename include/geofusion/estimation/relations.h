@@ -23,7 +23,11 @@ struct SupportPlaneConfig {
   int max_iterations = 200;
   double max_tilt_deg = 15.0;  ///< the plane normal within this angle of -gravity
   int min_inliers = 800;       ///< fewer: no plane this keyframe
-  double thickness_m = 0.03;   ///< the grounded object: a slab this thick under the plane
+  /// Once a plane is known it is followed (a least-squares refit near it) and searched for
+  /// again (RANSAC, the dominant plane, fused or not by fuseSupportPlane) every n-th keyframe,
+  /// so that a better supported surface can still take over; 1 = searched every keyframe.
+  int search_every_n_keyframes = 10;
+  double thickness_m = 0.03;  ///< the grounded object: a slab this thick under the plane
 };
 
 /// A horizontal supporting plane in the map frame.
@@ -41,8 +45,9 @@ struct SupportPlane {
 /// The dominant plane within max_tilt of horizontal among the keyframe's depth points (in the map
 /// frame through T_map_cam), by PCL SACSegmentation (RANSAC). With a `known` valid plane (the
 /// fused one of earlier keyframes) it is followed instead: the least-squares plane through the
-/// points near it, by PCL's plane model, when they are at least min_inliers (RANSAC otherwise,
-/// e.g. at another table). Invalid when there is none.
+/// points near it, by PCL's plane model, when they are at least min_inliers and at least half as
+/// many as the known plane had a keyframe on average (RANSAC otherwise, e.g. at another table).
+/// Invalid when there is none.
 SupportPlane estimateSupportPlane(const DepthImageView& depth, const PinholeIntrinsics& K,
                                   const Eigen::Isometry3d& T_map_cam,
                                   const Eigen::Vector3d& gravity,
