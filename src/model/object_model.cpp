@@ -95,12 +95,10 @@ Eigen::AlignedBox3f boxOf(const ObjectModel& model) {
 }
 
 void ModelSet::add(ObjectModel model, const SurfaceFeatureConfig& feature_config) {
-  model.extents = model.mesh.extents();
-  if (!model.mesh.vertices.empty()) {
-    Eigen::Vector3f lo, hi;
-    model.mesh.bounds(&lo, &hi);
-    model.box = Eigen::AlignedBox3f(lo, hi);
-  }
+  model.box.setEmpty();  // measured from the mesh, whatever was stored
+  model.box = boxOf(model);
+  model.extents =
+      model.mesh.vertices.empty() ? Eigen::Vector3f::Zero() : Eigen::Vector3f(model.box.sizes());
   if (model.points.empty()) model.points = sampleSurfacePoints(model.mesh, kSampledPoints);
   if (model.features.planes.empty() && model.features.curves.empty()) {
     model.features = extractSurfaceFeatures(model.mesh, feature_config);

@@ -38,21 +38,9 @@ def screenshot(name, out=OUT):
 
 
 def colours(image):
+    """Distinct colours on screen: the bare Xvfb root has two, rviz's panels and 3D view
+    hundreds."""
     return len(numpy.unique((image * 255).astype(numpy.uint8).reshape(-1, 3), axis=0))
-
-
-def wait_for_rviz_window(timeout_s, scratch):
-    """Polls the display until rviz's window is drawn on it (the bare Xvfb root has two
-    colours, rviz's panels and 3D view hundreds); the last screenshot's colour count."""
-    deadline = time.time() + timeout_s
-    count = 0
-    while time.time() < deadline:
-        _, image = screenshot('rviz_startup.png', scratch)
-        count = colours(image)
-        if count > 50:
-            return count
-        time.sleep(1.0)
-    return count
 
 
 def chromatic(image):
@@ -60,12 +48,12 @@ def chromatic(image):
     return int(numpy.count_nonzero(image.max(axis=2) - image.min(axis=2) > 0.1))
 
 
-def screenshot_when(name, condition, timeout_s):
+def screenshot_when(name, condition, timeout_s, out=OUT):
     """Screenshots until `condition(image)` holds (rviz draws at its own pace under a software
     renderer on a busy machine) or time runs out; the last one."""
     deadline = time.time() + timeout_s
     while True:
-        path, image = screenshot(name)
+        path, image = screenshot(name, out)
         if condition(image) or time.time() > deadline:
             return path, image
         time.sleep(1.0)
@@ -102,7 +90,9 @@ class RvizScreenshotTest(unittest.TestCase):
                                             ['/scene_estimator/object_map',
                                              '/geofusion_panel/selection'], timeout_s=60),
                         'the estimator or the rviz map panel did not come up')
-        drawn = wait_for_rviz_window(RVIZ_WINDOW_TIMEOUT_S, self.dir)
+        _, startup = screenshot_when('rviz_startup.png', lambda im: colours(im) > 50,
+                                     RVIZ_WINDOW_TIMEOUT_S, out=self.dir)
+        drawn = colours(startup)
         if drawn <= 50:
             alive = util.subprocess.call(['rosnode', 'ping', '-c', '1', '/rviz'],
                                          stdout=util.subprocess.DEVNULL) == 0
