@@ -237,6 +237,9 @@ class Table {
          [f](GeoFusionConfig& c) { return &f(c)->damping; });
     real("refinement.min_inlier_gain", -1, 1, "accepted when the inlier ratio gains more than this",
          [f](GeoFusionConfig& c) { return &f(c)->min_inlier_gain; });
+    real("refinement.min_visible_share", 0, 1,
+         "... judged when this share of the detection's surface is unhidden, else by f_gc",
+         [f](GeoFusionConfig& c) { return &f(c)->min_visible_share; });
     real("refinement.ray_sigma_m", 1e-4, 0.5,
          "stage I: translation std of a refined measurement along the ray, m",
          [f](GeoFusionConfig& c) { return &f(c)->ray_sigma_m; });
@@ -301,6 +304,9 @@ class Table {
     real("association.merge_thin_fraction", 0, 1,
          "... or this share of the thinner object's extent",
          [f](GeoFusionConfig& c) { return &f(c)->merge_thin_fraction; });
+    real("association.merge_cross_class_fraction", 0, 1,
+         "objects of two classes merge only past this share of the thinner one's extent",
+         [f](GeoFusionConfig& c) { return &f(c)->merge_cross_class_fraction; });
     flag("association.joint_assignment",
          "one Hungarian assignment per keyframe (false: the paper's greedy order)",
          [f](GeoFusionConfig& c) { return &f(c)->joint_assignment; });
@@ -427,6 +433,19 @@ class Table {
          [f](GeoFusionConfig& c) { return &f(c)->max_translation_m; });
     real("relocalisation.max_rotation_deg", 0, 180, "larger corrections refused, deg",
          [f](GeoFusionConfig& c) { return &f(c)->max_rotation_deg; });
+    real("relocalisation.drift_fraction", 0, 10,
+         "odometry drift: translation error per metre travelled since the map last agreed",
+         [f](GeoFusionConfig& c) { return &f(c)->drift_fraction; });
+    real("relocalisation.drift_rad_per_m", 0, 10, "... heading error per metre travelled, rad",
+         [f](GeoFusionConfig& c) { return &f(c)->drift_rad_per_m; });
+    real("relocalisation.drift_rad_per_rad", 0, 10, "... heading error per radian turned",
+         [f](GeoFusionConfig& c) { return &f(c)->drift_rad_per_rad; });
+    real("relocalisation.gate_chi2", 0, 1e6,
+         "corrections beyond this squared Mahalanobis distance against the drift refused",
+         [f](GeoFusionConfig& c) { return &f(c)->gate_chi2; });
+    integer("relocalisation.min_margin", 0, 1000,
+            "applied with this many more detections on objects than the runner-up hypothesis",
+            [f](GeoFusionConfig& c) { return &f(c)->min_margin; });
   }
   void stageTwo() {
     auto f = [](GeoFusionConfig& c) { return &c.estimator.stage_two; };

@@ -219,6 +219,21 @@ double rotationAngle(const Eigen::Matrix3d& R) {
 
 }  // namespace
 
+bool improves(const ConsistencyResult& before, const ConsistencyResult& after,
+              const DepthRefinementConfig& config) {
+  if (!after.determined) return false;
+  // The inlier ratio counts only the points nothing hides: with almost all of them hidden (a
+  // pose behind the observed surface) it is the ratio of a few points and says nothing; the
+  // score, whose occlusion term sees the pose sunk behind the surface, judges then.
+  auto r_in_defined = [&](const ConsistencyResult& r) {
+    const int observed = r.rendered - r.missing;
+    return r.determined && observed > 0 &&
+           r.inliers + r.outliers + r.uncertain >= config.min_visible_share * observed;
+  };
+  if (!r_in_defined(before) || !r_in_defined(after)) return after.score > before.score;
+  return after.r_in > before.r_in + config.min_inlier_gain;
+}
+
 DepthRefiner::DepthRefiner(ConsistencyScorer* scorer, const DepthRefinementConfig& config)
     : scorer_(scorer), config_(config) {}
 
@@ -278,7 +293,7 @@ DepthRefinement DepthRefiner::refine(const std::shared_ptr<const ObjectModel>& m
   // Scored from the first rendering, moved (one render a detection).
   const ConsistencyResult refined =
       compareMovedDepth(*rendered, T * T_cam_obj.inverse(), depth, K, scorer_->config());
-  if (!refined.determined || !(refined.r_in > out.before.r_in + config_.min_inlier_gain)) {
+  if (!improves(out.before, refined, config_)) {
     out.outcome = RefinementOutcome::kNoImprovement;
     return out;
   }

@@ -1,5 +1,7 @@
 #include "geofusion/estimation/relocalisation.h"
 
+#include "geofusion/common/enum_names.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -70,29 +72,57 @@ int detectionsOnMap(const std::vector<LabelledPoint>& detections,
   return n;
 }
 
-}  // namespace
+// Squared Mahalanobis distance of correction T (its translation at `centre`, its rotation)
+// against the odometry's drift; 0 when the drift is unknown.
+double mahalanobisSq(const Eigen::Isometry3d& T, const Eigen::Vector3d& centre,
+                     const OdometryDrift& drift) {
+  if (!std::isfinite(drift.sigma_m) || !std::isfinite(drift.sigma_rad)) return 0.0;
+  const double t = (T * centre - centre).norm() / std::max(drift.sigma_m, 1e-9);
+  const double r = Eigen::AngleAxisd(T.linear()).angle() / std::max(drift.sigma_rad, 1e-12);
+  return t * t + r * r;
+}
 
-Relocalisation relocalise(const std::vector<LabelledPoint>& detections,
-                          const std::vector<LabelledPoint>& objects, const Eigen::Vector3d& gravity,
-                          const RelocalisationConfig& config) {
-  Relocalisation out;
-  const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
-  out.inliers_before = out.inliers_after =
-      detectionsOnMap(detections, objects, identity, config.inlier_m);
-  if (!config.enabled || static_cast<int>(detections.size()) < config.min_inliers ||
-      out.inliers_before >= config.max_share_on_map * static_cast<double>(detections.size()))
-    return out;
-  out.tried = true;
-  const Eigen::Matrix3d R_g = gravityFrame(gravity);
-  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-  for (const LabelledPoint& d : detections) centre += d.position;
-  centre /= static_cast<double>(detections.size());
-  // Hypotheses from two correspondences of the same classes whose spacing agrees.
-  Eigen::Isometry3d best = identity;
-  int best_inliers = out.inliers_before, hypotheses = 0;
+// The object each detection lands on under correction T (-1: none).
+std::vector<int> matchesOf(const Eigen::Isometry3d& T, const std::vector<LabelledPoint>& detections,
+                           const std::vector<LabelledPoint>& objects, double inlier_m) {
+  std::vector<int> out;
+  for (const LabelledPoint& d : detections) out.push_back(nearestObject(d, objects, T, inlier_m));
+  return out;
+}
+
+// Another explanation of the detections than `best`: fewer than half of the detections it puts
+// on objects go to the objects `best` puts them on (a turn about a near-symmetric layout, the
+// other of two repeated groups; not a slightly different fit of the same matches).
+bool alternative(const std::vector<int>& matches, const std::vector<int>& best) {
+  int matched = 0, agreeing = 0;
+  for (std::size_t i = 0; i < matches.size(); ++i) {
+    if (matches[i] < 0) continue;
+    ++matched;
+    agreeing += matches[i] == best[i];
+  }
+  return matched > 0 && 2 * agreeing < matched;
+}
+
+struct Hypothesis {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  int inliers = 0;
+  double mahalanobis_sq = 0.0;
+};
+
+// Hypotheses from two correspondences of the same classes whose spacing agrees, within the
+// configured bounds, with their support and their distance against the drift. The first one is
+// no correction.
+std::vector<Hypothesis> pairHypotheses(const std::vector<LabelledPoint>& detections,
+                                       const std::vector<LabelledPoint>& objects,
+                                       const Eigen::Matrix3d& R_g, const Eigen::Vector3d& centre,
+                                       const RelocalisationConfig& config,
+                                       const OdometryDrift& drift) {
+  std::vector<Hypothesis> out(1);
+  out[0].inliers = detectionsOnMap(detections, objects, out[0].T, config.inlier_m);
+  int tried = 0;
   const std::size_t n = detections.size();
-  for (std::size_t i = 0; i < n && hypotheses < kMaxHypotheses; ++i) {
-    for (std::size_t k = i + 1; k < n && hypotheses < kMaxHypotheses; ++k) {
+  for (std::size_t i = 0; i < n && tried < kMaxHypotheses; ++i) {
+    for (std::size_t k = i + 1; k < n && tried < kMaxHypotheses; ++k) {
       const double spacing = (detections[i].position - detections[k].position).norm();
       if (spacing < 2.0 * config.inlier_m) continue;  // too close to fix a heading
       for (std::size_t a = 0; a < objects.size(); ++a) {
@@ -102,36 +132,144 @@ Relocalisation relocalise(const std::vector<LabelledPoint>& detections,
           if (std::abs((objects[a].position - objects[b].position).norm() - spacing) >
               2.0 * config.inlier_m)
             continue;
-          ++hypotheses;
-          const Eigen::Isometry3d T =
-              headingAndTranslation({detections[i].position, detections[k].position},
-                                    {objects[a].position, objects[b].position}, R_g);
-          if (!withinBounds(T, centre, config)) continue;
-          const int inliers = detectionsOnMap(detections, objects, T, config.inlier_m);
-          if (inliers > best_inliers) best_inliers = inliers, best = T;
+          ++tried;
+          Hypothesis h;
+          h.T = headingAndTranslation({detections[i].position, detections[k].position},
+                                      {objects[a].position, objects[b].position}, R_g);
+          if (!withinBounds(h.T, centre, config)) continue;
+          h.inliers = detectionsOnMap(detections, objects, h.T, config.inlier_m);
+          h.mahalanobis_sq = mahalanobisSq(h.T, centre, drift);
+          out.push_back(h);
         }
       }
     }
   }
-  if (best_inliers <= out.inliers_before) return out;
-  // Refined on every detection it brings onto an object.
+  return out;
+}
+
+// The best hypothesis refined on every detection it brings onto an object, when that keeps its
+// support, its bounds and its gate.
+Hypothesis refined(const Hypothesis& best, const std::vector<LabelledPoint>& detections,
+                   const std::vector<LabelledPoint>& objects, const Eigen::Matrix3d& R_g,
+                   const Eigen::Vector3d& centre, const RelocalisationConfig& config,
+                   const OdometryDrift& drift) {
   std::vector<Eigen::Vector3d> from, to;
   for (const LabelledPoint& d : detections) {
-    const int j = nearestObject(d, objects, best, config.inlier_m);
+    const int j = nearestObject(d, objects, best.T, config.inlier_m);
     if (j < 0) continue;
     from.push_back(d.position);
     to.push_back(objects[static_cast<std::size_t>(j)].position);
   }
-  const Eigen::Isometry3d refined = headingAndTranslation(from, to, R_g);
-  const int refined_inliers = detectionsOnMap(detections, objects, refined, config.inlier_m);
-  if (refined_inliers >= best_inliers && withinBounds(refined, centre, config))
-    best = refined, best_inliers = refined_inliers;
-  if (best_inliers < config.min_inliers ||
-      best_inliers < config.min_gain * out.inliers_before + 1.0)
+  if (from.size() < 2) return best;
+  Hypothesis h;
+  h.T = headingAndTranslation(from, to, R_g);
+  h.inliers = detectionsOnMap(detections, objects, h.T, config.inlier_m);
+  h.mahalanobis_sq = mahalanobisSq(h.T, centre, drift);
+  const bool keeps = h.inliers >= best.inliers && withinBounds(h.T, centre, config) &&
+                     h.mahalanobis_sq <= std::max(config.gate_chi2, best.mahalanobis_sq);
+  return keeps ? h : best;
+}
+
+}  // namespace
+
+namespace {
+const std::pair<RelocalisationDecision, const char*> kDecisionNames[] = {
+    {RelocalisationDecision::kNotSearched, "not_searched"},
+    {RelocalisationDecision::kApplied, "applied"},
+    {RelocalisationDecision::kNoGain, "no_gain"},
+    {RelocalisationDecision::kBeyondDrift, "beyond_drift"},
+    {RelocalisationDecision::kAmbiguous, "ambiguous"},
+};
+}  // namespace
+
+const char* toString(RelocalisationDecision decision) { return nameIn(kDecisionNames, decision); }
+
+bool parseRelocalisationDecision(const std::string& name, RelocalisationDecision* decision) {
+  return parseIn(kDecisionNames, name, decision);
+}
+
+OdometryDrift accumulatedDrift(const std::vector<Eigen::Isometry3d>& path,
+                               const Eigen::Vector3d& centre, const RelocalisationConfig& config,
+                               double sigma_position_m, double sigma_rotation_rad) {
+  OdometryDrift out;
+  double turned = 0.0, lever = 0.0;
+  for (std::size_t i = 0; i < path.size(); ++i) {
+    lever = std::max(lever, (centre - path[i].translation()).norm());
+    if (i == 0) continue;
+    const Eigen::Isometry3d step = path[i - 1].inverse() * path[i];
+    out.path_m += step.translation().norm();
+    turned += Eigen::AngleAxisd(step.linear()).angle();
+    ++out.keyframes;
+  }
+  const double n = out.keyframes;
+  const double systematic_rad = config.drift_rad_per_m * out.path_m + config.drift_rad_per_rad * turned;
+  out.sigma_rad = std::sqrt(n * sigma_rotation_rad * sigma_rotation_rad +
+                            systematic_rad * systematic_rad);
+  const double systematic_m = config.drift_fraction * out.path_m;
+  out.sigma_m = std::sqrt(n * sigma_position_m * sigma_position_m + systematic_m * systematic_m +
+                          out.sigma_rad * out.sigma_rad * lever * lever);
+  return out;
+}
+
+Relocalisation relocalise(const std::vector<LabelledPoint>& detections,
+                          const std::vector<LabelledPoint>& objects, const Eigen::Vector3d& gravity,
+                          const RelocalisationConfig& config, const OdometryDrift& drift) {
+  Relocalisation out;
+  out.drift = drift;
+  out.detections = static_cast<int>(detections.size());
+  out.inliers_before = out.inliers_after =
+      detectionsOnMap(detections, objects, Eigen::Isometry3d::Identity(), config.inlier_m);
+  const bool on_map =
+      out.inliers_before >= config.max_share_on_map * static_cast<double>(detections.size());
+  out.agreed = out.inliers_before > 0 && on_map;
+  if (!config.enabled || out.detections < config.min_inliers || on_map) return out;
+  out.tried = true;
+  out.decision = RelocalisationDecision::kNoGain;
+  const Eigen::Matrix3d R_g = gravityFrame(gravity);
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (const LabelledPoint& d : detections) centre += d.position;
+  centre /= static_cast<double>(detections.size());
+  const std::vector<Hypothesis> hypotheses =
+      pairHypotheses(detections, objects, R_g, centre, config, drift);
+  // The best within the odometry's reach, and the best of all (to say why one is refused).
+  std::size_t best = 0, best_any = 0;
+  for (std::size_t h = 1; h < hypotheses.size(); ++h) {
+    if (hypotheses[h].inliers > hypotheses[best_any].inliers) best_any = h;
+    if (hypotheses[h].mahalanobis_sq <= config.gate_chi2 &&
+        hypotheses[h].inliers > hypotheses[best].inliers)
+      best = h;
+  }
+  auto gains = [&](const Hypothesis& h) {
+    return h.inliers > out.inliers_before && h.inliers >= config.min_inliers &&
+           h.inliers >= config.min_gain * out.inliers_before + 1.0;
+  };
+  if (!gains(hypotheses[best])) {
+    if (gains(hypotheses[best_any])) {
+      out.decision = RelocalisationDecision::kBeyondDrift;
+      out.inliers_after = hypotheses[best_any].inliers;
+      out.mahalanobis_sq = hypotheses[best_any].mahalanobis_sq;
+      out.T_correction = hypotheses[best_any].T;
+    }
     return out;
+  }
+  const Hypothesis chosen =
+      refined(hypotheses[best], detections, objects, R_g, centre, config, drift);
+  out.inliers_after = chosen.inliers;
+  out.mahalanobis_sq = chosen.mahalanobis_sq;
+  out.T_correction = chosen.T;
+  // The runner-up: the best other explanation the odometry allows (no correction included).
+  const std::vector<int> chosen_matches = matchesOf(chosen.T, detections, objects, config.inlier_m);
+  for (const Hypothesis& h : hypotheses) {
+    if (h.mahalanobis_sq <= config.gate_chi2 && h.inliers > out.runner_up &&
+        alternative(matchesOf(h.T, detections, objects, config.inlier_m), chosen_matches))
+      out.runner_up = h.inliers;
+  }
+  if (chosen.inliers - out.runner_up < config.min_margin) {
+    out.decision = RelocalisationDecision::kAmbiguous;
+    return out;
+  }
+  out.decision = RelocalisationDecision::kApplied;
   out.applied = true;
-  out.inliers_after = best_inliers;
-  out.T_correction = best;
   return out;
 }
 

@@ -53,6 +53,73 @@ void emitContacts(YAML::Emitter& out, const KeyframeResult& r) {
   out << YAML::EndSeq;
 }
 
+// The keyframe's relocalisation: whether it searched, what it decided, the correction found, its
+// support, the runner-up's, and the odometry drift it was judged against (issue 32).
+void emitRelocalisation(YAML::Emitter& out, const Relocalisation& r) {
+  out << YAML::Key << "relocalisation" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  out << YAML::Key << "searched" << YAML::Value << r.tried;
+  out << YAML::Key << "decision" << YAML::Value << toString(r.decision);
+  out << YAML::Key << "detections" << YAML::Value << r.detections;
+  out << YAML::Key << "on_map" << YAML::Value << r.inliers_before;
+  if (r.tried) {
+    out << YAML::Key << "support" << YAML::Value << r.inliers_after;
+    out << YAML::Key << "runner_up" << YAML::Value << r.runner_up;
+    out << YAML::Key << "mahalanobis_sq" << YAML::Value << r.mahalanobis_sq;
+    const bool gated = std::isfinite(r.drift.sigma_m);
+    out << YAML::Key << "drift_sigma_m" << YAML::Value << (gated ? r.drift.sigma_m : -1.0);
+    out << YAML::Key << "drift_sigma_rad" << YAML::Value << (gated ? r.drift.sigma_rad : -1.0);
+    out << YAML::Key << "path_m" << YAML::Value << r.drift.path_m;
+    yaml_io::emitPose(out, "correction", r.T_correction);
+  }
+  out << YAML::EndMap;
+}
+
+Relocalisation readRelocalisation(const YAML::Node& n) {
+  Relocalisation r;
+  if (!n) return r;  // results written before issue 32
+  r.tried = n["searched"].as<bool>();
+  if (!parseRelocalisationDecision(n["decision"].as<std::string>(), &r.decision))
+    throw std::runtime_error("relocalisation: unknown decision '" +
+                             n["decision"].as<std::string>() + "'");
+  r.applied = r.decision == RelocalisationDecision::kApplied;
+  r.detections = n["detections"].as<int>(0);
+  r.inliers_before = r.inliers_after = n["on_map"].as<int>(0);
+  if (!r.tried) return r;
+  r.inliers_after = n["support"].as<int>();
+  r.runner_up = n["runner_up"].as<int>();
+  r.mahalanobis_sq = n["mahalanobis_sq"].as<double>();
+  const double sigma_m = n["drift_sigma_m"].as<double>(), sigma_rad = n["drift_sigma_rad"].as<double>();
+  if (sigma_m >= 0) r.drift.sigma_m = sigma_m, r.drift.sigma_rad = sigma_rad;
+  r.drift.path_m = n["path_m"].as<double>(0.0);
+  r.T_correction = yaml_io::parsePose(n["correction"], "correction");
+  return r;
+}
+
+void emitRemovals(YAML::Emitter& out, const std::vector<Removal>& removals) {
+  out << YAML::Key << "removals" << YAML::Value << YAML::BeginSeq;
+  for (const Removal& r : removals) {
+    out << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "id" << YAML::Value << r.id;
+    out << YAML::Key << "reason" << YAML::Value << toString(r.reason);
+    if (r.reason == RemovalReason::kMerged) out << YAML::Key << "into" << YAML::Value << r.into;
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+}
+
+std::vector<Removal> readRemovals(const YAML::Node& n) {
+  std::vector<Removal> out;
+  for (const YAML::Node& r : n) {
+    Removal removal;
+    removal.id = r["id"].as<int>();
+    if (!parseRemovalReason(r["reason"].as<std::string>(), &removal.reason))
+      throw std::runtime_error("removals: unknown reason '" + r["reason"].as<std::string>() + "'");
+    removal.into = r["into"].as<int>(-1);
+    out.push_back(removal);
+  }
+  return out;
+}
+
 void emitTimings(YAML::Emitter& out, const StageTimings& t) {
   out << YAML::Key << "timings_ms" << YAML::Value << YAML::Flow << YAML::BeginMap;
   out << YAML::Key << "consistency" << YAML::Value << t.consistency_ms;
@@ -138,6 +205,31 @@ void readStages(const YAML::Node& n, KeyframeResult* k) {
 
 }  // namespace
 
+std::vector<std::pair<std::string, std::size_t>> removalsByReason(const RunResults& results) {
+  std::vector<std::pair<std::string, std::size_t>> out;
+  for (RemovalReason reason : {RemovalReason::kCandidateTimeout, RemovalReason::kSeenAbsent,
+                               RemovalReason::kMerged}) {
+    std::size_t n = 0;
+    for (const KeyframeResult& k : results.keyframes)
+      for (const Removal& r : k.removals) n += r.reason == reason;
+    out.emplace_back(toString(reason), n);
+  }
+  return out;
+}
+
+std::vector<std::pair<std::string, std::size_t>> relocalisationsByDecision(
+    const RunResults& results) {
+  std::vector<std::pair<std::string, std::size_t>> out;
+  for (RelocalisationDecision d :
+       {RelocalisationDecision::kApplied, RelocalisationDecision::kNoGain,
+        RelocalisationDecision::kBeyondDrift, RelocalisationDecision::kAmbiguous}) {
+    std::size_t n = 0;
+    for (const KeyframeResult& k : results.keyframes) n += k.relocalisation.decision == d;
+    out.emplace_back(toString(d), n);
+  }
+  return out;
+}
+
 int failedStages(const RunResults& results) {
   int failed = 0;
   auto count = [&](const KeyframeResult& k) {
@@ -173,6 +265,12 @@ bool writeRunResults(const std::string& path, const RunResults& r, std::string* 
     out << YAML::EndMap;
   }
   out << YAML::Key << "keyframes_over_budget" << YAML::Value << r.keyframes_over_budget;
+  for (const auto& [key, counts] : {std::pair{"removals_by_reason", removalsByReason(r)},
+                                    std::pair{"relocalisations", relocalisationsByDecision(r)}}) {
+    out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginMap;
+    for (const auto& [word, n] : counts) out << YAML::Key << word << YAML::Value << n;
+    out << YAML::EndMap;
+  }
   out << YAML::Key << "keyframes" << YAML::Value << YAML::BeginSeq;
   for (const KeyframeResult& k : r.keyframes) {
     out << YAML::BeginMap;
@@ -184,6 +282,8 @@ bool writeRunResults(const std::string& path, const RunResults& r, std::string* 
     emitTimings(out, k.timings);
     emitStages(out, k);
     out << YAML::Key << "removed_ids" << YAML::Value << YAML::Flow << k.removed_ids;
+    emitRemovals(out, k.removals);
+    emitRelocalisation(out, k.relocalisation);
     out << YAML::Key << "skipped_detections" << YAML::Value << k.skipped_detections;
     if (!k.detection_warning.empty())
       out << YAML::Key << "detection_warning" << YAML::Value << k.detection_warning;
@@ -299,6 +399,8 @@ bool readRunResults(const std::string& path, const ModelSet& models, RunResults*
       kr.timings = readTimings(k["timings_ms"]);
       readStages(k["stages"], &kr);
       kr.removed_ids = k["removed_ids"].as<std::vector<int>>();
+      kr.removals = readRemovals(k["removals"]);
+      kr.relocalisation = readRelocalisation(k["relocalisation"]);
       kr.skipped_detections = k["skipped_detections"].as<int>(0);
       kr.detections = readDetections(k["detections"]);
       kr.detection_warning = k["detection_warning"].as<std::string>("");

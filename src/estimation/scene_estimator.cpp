@@ -1,5 +1,6 @@
 #include "geofusion/estimation/scene_estimator.h"
 
+#include "geofusion/common/enum_names.h"
 #include "geofusion/common/statistics.h"
 #include "geofusion/model/collision.h"
 #include "geofusion/render/consistency.h"
@@ -77,6 +78,11 @@ const std::pair<DetectionDecision, const char*> kDecisionNames[] = {
     {DetectionDecision::kCandidate, "candidate"},
     {DetectionDecision::kRemoved, "removed"},
 };
+const std::pair<RemovalReason, const char*> kRemovalNames[] = {
+    {RemovalReason::kCandidateTimeout, "candidate_timeout"},
+    {RemovalReason::kSeenAbsent, "seen_absent"},
+    {RemovalReason::kMerged, "merged"},
+};
 
 // The refinement a method runs: the configured one, on only when its stages include it.
 DepthRefinementConfig refinementOf(const EstimatorConfig& config, const MethodStages& stages) {
@@ -86,20 +92,16 @@ DepthRefinementConfig refinementOf(const EstimatorConfig& config, const MethodSt
 }
 }  // namespace
 
-const char* toString(DetectionDecision decision) {
-  for (const auto& d : kDecisionNames)
-    if (d.first == decision) return d.second;
-  return "skipped";
-}
+const char* toString(DetectionDecision decision) { return nameIn(kDecisionNames, decision); }
 
 bool parseDetectionDecision(const std::string& name, DetectionDecision* decision) {
-  for (const auto& d : kDecisionNames) {
-    if (name == d.second) {
-      *decision = d.first;
-      return true;
-    }
-  }
-  return false;
+  return parseIn(kDecisionNames, name, decision);
+}
+
+const char* toString(RemovalReason reason) { return nameIn(kRemovalNames, reason); }
+
+bool parseRemovalReason(const std::string& name, RemovalReason* reason) {
+  return parseIn(kRemovalNames, name, reason);
 }
 
 SceneEstimator::SceneEstimator(const ModelSet& models, const EstimatorConfig& config,
@@ -137,11 +139,13 @@ bool SceneEstimator::resume(const std::vector<ObjectEstimate>& objects,
     next_id_ = std::max(next_id_, o.id + 1);
   }
   T_map_odom_start_ = T_map_odom;
+  relocalisation_anchor_ = -1;  // where the robot is against the map is not known yet
   return true;
 }
 
 void SceneEstimator::reset() {
   T_map_odom_start_ = Eigen::Isometry3d::Identity();
+  relocalisation_anchor_ = 0;
   T_odom_fix_ = Eigen::Isometry3d::Identity();
   tracks_.clear();
   T_map_cam_.clear();
@@ -253,14 +257,16 @@ KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
   timings.association_ms = msSince(t0);
 
   t0 = Clock::now();
+  std::vector<Removal> removals;
   std::vector<int> removed;
   if (stages_.false_positive_removal) {
     std::vector<int> touched;
     for (int id : detection_object)
       if (id >= 0) touched.push_back(id);
-    removeFalsePositives(touched, t, &removed);
-    if (stages_.free_space_removal) removeObjectsSeenAbsent(kf, touched, &removed);
-    mergeOverlapping(&removed);
+    removeFalsePositives(touched, t, &removals);
+    if (stages_.free_space_removal) removeObjectsSeenAbsent(kf, touched, &removals);
+    mergeOverlapping(&removals);
+    for (const Removal& r : removals) removed.push_back(r.id);
     for (int& id : detection_object) {
       if (std::find(removed.begin(), removed.end(), id) != removed.end()) id = -1;
     }
@@ -279,6 +285,7 @@ KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
   out.detections = reportDetections(kf, detections, assigned, started, removed);
   out.detection_warning = monitor_.add(out.detections);
   out.removed_ids = std::move(removed);
+  out.removals = std::move(removals);
   out.skipped_detections = detections.skipped;
   out.relocalisation = relocalisation;
   out.stage_one = stage_one;
@@ -306,6 +313,7 @@ Eigen::Isometry3d SceneEstimator::appendCameraPose(const Keyframe& kf) {
 // corrected one: the odometry kept from here on is T_odom_fix_ x the robot's.
 Relocalisation SceneEstimator::relocaliseCamera(const ScoredDetections& detections) {
   std::vector<LabelledPoint> seen, mapped;
+  const std::size_t t = T_map_cam_.size() - 1;
   const Eigen::Isometry3d& T_map_cam = T_map_cam_.back();
   for (int k : detections.usable) {
     const std::size_t i = static_cast<std::size_t>(k);
@@ -313,9 +321,15 @@ Relocalisation SceneEstimator::relocaliseCamera(const ScoredDetections& detectio
   }
   for (std::size_t j : reportedTracks())
     mapped.push_back({tracks_[j].model->name, reportedPose(tracks_[j]).translation()});
-  const Relocalisation r = relocalise(seen, mapped, config_.gravity, config_.relocalisation);
+  if (mapped.empty()) {  // nothing to drift against: the camera makes the map
+    if (relocalisation_anchor_ >= 0) relocalisation_anchor_ = static_cast<int>(t);
+    return Relocalisation();
+  }
+  const Relocalisation r = relocalise(seen, mapped, config_.gravity, config_.relocalisation,
+                                      driftSinceAnchor(seen));
+  if (r.agreed) relocalisation_anchor_ = static_cast<int>(t);
   if (!r.applied) return r;
-  const std::size_t t = T_map_cam_.size() - 1;
+  relocalisation_anchor_ = static_cast<int>(t);
   if (t == 0) {  // a resumed map: the first camera is placed through it
     T_map_cam_[0] = r.T_correction * T_map_cam_[0];
     return r;
@@ -325,6 +339,24 @@ Relocalisation SceneEstimator::relocaliseCamera(const ScoredDetections& detectio
   T_odom_cam_[t] = T_odom_cam_[t - 1] * (T_map_cam_[t - 1].inverse() * T_map_cam_[t]);
   T_odom_fix_ = T_odom_cam_[t] * robot_odom.inverse();
   return r;
+}
+
+// How far the odometry can have taken the camera from the map since the last keyframe whose
+// detections agreed with it (relocalisation.h); unknown (no gate) on a resumed map until then.
+OdometryDrift SceneEstimator::driftSinceAnchor(const std::vector<LabelledPoint>& seen) const {
+  if (relocalisation_anchor_ < 0 || seen.empty()) return OdometryDrift();
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (const LabelledPoint& d : seen) centre += d.position;
+  centre /= static_cast<double>(seen.size());
+  const std::size_t anchor = std::min(static_cast<std::size_t>(relocalisation_anchor_),
+                                      T_odom_cam_.size() - 1);
+  const std::vector<Eigen::Isometry3d> path(T_odom_cam_.begin() + static_cast<std::ptrdiff_t>(anchor),
+                                            T_odom_cam_.end());
+  // The path in the odometry frame, the centre brought there through the current camera.
+  const Eigen::Vector3d centre_odom = T_odom_cam_.back() * (T_map_cam_.back().inverse() * centre);
+  return accumulatedDrift(path, centre_odom, config_.relocalisation,
+                          config_.stage_one.odometry_sigma_position_m,
+                          config_.stage_one.odometry_sigma_rotation_rad);
 }
 
 // Usable detections (known class, enough score, finite pose), depth-refined when the method
@@ -502,7 +534,7 @@ std::vector<std::size_t> SceneEstimator::reportedTracks() const {
 }
 
 void SceneEstimator::removeFalsePositives(const std::vector<int>& touched, int keyframe,
-                                          std::vector<int>* removed) {
+                                          std::vector<Removal>* removed) {
   std::vector<Track> kept;
   for (Track& tr : tracks_) {
     if (std::find(touched.begin(), touched.end(), tr.id) != touched.end()) {
@@ -512,7 +544,7 @@ void SceneEstimator::removeFalsePositives(const std::vector<int>& touched, int k
     // A candidate above eps_fp is not in the map; unseen for long, it is dropped.
     if (!tr.confirmed &&
         keyframe - tr.last_keyframe > config_.association.candidate_timeout_keyframes) {
-      removed->push_back(tr.id);
+      removed->push_back({tr.id, RemovalReason::kCandidateTimeout});
     } else {
       kept.push_back(std::move(tr));
     }
@@ -524,7 +556,7 @@ void SceneEstimator::removeFalsePositives(const std::vector<int>& touched, int k
 // rendered at its pose; free space over its visible, unoccluded surface for
 // lifecycle.free_space_keyframes keyframes in a row removes it (LifecycleConfig).
 void SceneEstimator::removeObjectsSeenAbsent(const Keyframe& kf, const std::vector<int>& measured,
-                                             std::vector<int>* removed) {
+                                             std::vector<Removal>* removed) {
   if (!kf.depth.data) return;
   const LifecycleConfig& c = config_.lifecycle;
   const Eigen::Isometry3d T_cam_map = T_map_cam_.back().inverse();
@@ -561,7 +593,7 @@ void SceneEstimator::removeObjectsSeenAbsent(const Keyframe& kf, const std::vect
   std::vector<Track> kept;
   for (Track& tr : tracks_) {
     if (tr.free_space_keyframes >= std::max(1, c.free_space_keyframes))
-      removed->push_back(tr.id);
+      removed->push_back({tr.id, RemovalReason::kSeenAbsent});
     else
       kept.push_back(std::move(tr));
   }
@@ -574,54 +606,70 @@ double SceneEstimator::Track::depthEvidence() const {
   return sum;
 }
 
-void SceneEstimator::mergeOverlapping(std::vector<int>* removed) {
+double SceneEstimator::Track::meanConsistency() const {
+  return observations.empty() ? best_consistency
+                              : depthEvidence() / static_cast<double>(observations.size());
+}
+
+// Whether A and B are one object mapped twice (the paper's overlap test, issue 32): their boxes
+// overlap by more than merge_ratio and their hulls interpenetrate by more than neighbours in
+// clutter can. Thin objects (markers, scissors) cannot interpenetrate by much: the bound scales
+// down with the thinner object's smallest extent. Objects of two classes (a real object differs
+// from its mesh by millimetres, so real neighbours overlap a little) must interpenetrate by
+// merge_cross_class_fraction of that extent: a look-alike reported in place of the object.
+bool SceneEstimator::mappedTwice(const Track& A, const Track& B) const {
+  const AssociationConfig& c = config_.association;
+  Eigen::Isometry3d Ta = reportedPose(A), Tb = reportedPose(B);
+  Ta.translation() += Ta.linear() * A.box_centre;
+  Tb.translation() += Tb.linear() * B.box_centre;
+  if (boxCollisionRatio(Ta, A.box_half, Tb, B.box_half) <= c.merge_ratio) return false;
+  const double thinnest = 2.0 * std::min(A.box_half.minCoeff(), B.box_half.minCoeff());
+  double needed = std::min(c.merge_min_penetration_m, c.merge_thin_fraction * thinnest);
+  if (A.model->name != B.model->name)
+    needed = std::max(needed, c.merge_cross_class_fraction * thinnest);
+  return collider_->penetration(A.model, reportedPose(A), B.model, reportedPose(B)) >= needed;
+}
+
+// The observations of D (same class) taken into K, one measurement per keyframe: K's own wins.
+void SceneEstimator::absorb(const Track& D, Track* K) {
+  for (const Observation& o : D.observations) {
+    const bool clash =
+        std::any_of(K->observations.begin(), K->observations.end(),
+                    [&](const Observation& x) { return x.keyframe == o.keyframe; });
+    if (!clash) K->observations.push_back(o);
+  }
+  std::sort(K->observations.begin(), K->observations.end(),
+            [](const Observation& x, const Observation& y) { return x.keyframe < y.keyframe; });
+  K->folded.clear();  // folded again from the merged observations
+  for (Observation& o : K->observations) o.folded = false;
+  K->best_consistency = std::max(K->best_consistency, D.best_consistency);
+  K->first_keyframe = std::min(K->first_keyframe, D.first_keyframe);
+  K->last_keyframe = std::max(K->last_keyframe, D.last_keyframe);
+}
+
+void SceneEstimator::mergeOverlapping(std::vector<Removal>* removed) {
   bool merged = true;
   while (merged) {
     merged = false;
     for (std::size_t a = 0; a < tracks_.size() && !merged; ++a) {
       for (std::size_t b = a + 1; b < tracks_.size() && !merged; ++b) {
-        Track &A = tracks_[a], &B = tracks_[b];
+        const Track &A = tracks_[a], &B = tracks_[b];
         if (!recentlySeen(A) && !recentlySeen(B)) continue;  // checked when last seen
-        Eigen::Isometry3d Ta = reportedPose(A), Tb = reportedPose(B);
-        Ta.translation() += Ta.linear() * A.box_centre;
-        Tb.translation() += Tb.linear() * B.box_centre;
-        if (boxCollisionRatio(Ta, A.box_half, Tb, B.box_half) <= config_.association.merge_ratio)
-          continue;
-        // Boxes of neighbours in clutter overlap; real duplicates also interpenetrate.
-        // Thin objects (markers, scissors) cannot interpenetrate by much: the bound scales down
-        // with the thinner object's smallest extent.
-        const double thinnest = 2.0 * std::min(A.box_half.minCoeff(), B.box_half.minCoeff());
-        const double needed = std::min(config_.association.merge_min_penetration_m,
-                                       config_.association.merge_thin_fraction * thinnest);
-        if (collider_->penetration(A.model, reportedPose(A), B.model, reportedPose(B)) < needed)
-          continue;
+        if (!mappedTwice(A, B)) continue;
         // Two of one class: the one with the higher false-positive score goes into the other (the
         // paper). Two classes (a look-alike reported for a stretch, a persistent phantom beside a
-        // real object): the one the depth supported more over all its measurements stays.
-        const bool keep_a = A.model->name == B.model->name
+        // real object): the one the depth supported more over all its measurements stays, and
+        // only when the depth supports it at least as well a measurement: else both stay.
+        const bool same_class = A.model->name == B.model->name;
+        const bool keep_a = same_class
                                 ? falsePositiveScore(A.best_consistency, A.measurementCount()) <=
                                       falsePositiveScore(B.best_consistency, B.measurementCount())
                                 : A.depthEvidence() >= B.depthEvidence();
         const std::size_t keep = keep_a ? a : b, drop = keep_a ? b : a;
-        Track &K = tracks_[keep], &D = tracks_[drop];
-        if (K.model->name == D.model->name) {
-          // Keep one measurement per keyframe: the kept object's own wins.
-          for (const Observation& o : D.observations) {
-            const bool clash =
-                std::any_of(K.observations.begin(), K.observations.end(),
-                            [&](const Observation& x) { return x.keyframe == o.keyframe; });
-            if (!clash) K.observations.push_back(o);
-          }
-          std::sort(
-              K.observations.begin(), K.observations.end(),
-              [](const Observation& x, const Observation& y) { return x.keyframe < y.keyframe; });
-          K.folded.clear();  // folded again from the merged observations
-          for (Observation& o : K.observations) o.folded = false;
-          K.best_consistency = std::max(K.best_consistency, D.best_consistency);
-          K.first_keyframe = std::min(K.first_keyframe, D.first_keyframe);
-          K.last_keyframe = std::max(K.last_keyframe, D.last_keyframe);
-        }
-        removed->push_back(D.id);
+        if (!same_class && tracks_[keep].meanConsistency() < tracks_[drop].meanConsistency())
+          continue;
+        if (same_class) absorb(tracks_[drop], &tracks_[keep]);
+        removed->push_back({tracks_[drop].id, RemovalReason::kMerged, tracks_[keep].id});
         tracks_.erase(tracks_.begin() + static_cast<std::ptrdiff_t>(drop));
         merged = true;
       }

@@ -268,7 +268,15 @@ void SceneEstimatorNode::reportFailedStages(const KeyframeResult& result) {
 
 // A relocalisation (map -> odom jumps by its correction) is said and counted for diagnostics.
 void SceneEstimatorNode::reportRelocalisation(const KeyframeResult& result) {
+  for (const Removal& removal : result.removals) ++removals_[toString(removal.reason)];
   const Relocalisation& r = result.relocalisation;
+  if (r.tried && !r.applied) {
+    ++relocalisations_refused_[toString(r.decision)];
+    ROS_DEBUG_STREAM("geofusion: keyframe " << result.keyframe << " relocalisation refused ("
+                                             << toString(r.decision) << "): support "
+                                             << r.inliers_after << ", runner-up " << r.runner_up
+                                             << ", Mahalanobis^2 " << r.mahalanobis_sq);
+  }
   if (!r.applied) return;
   ++relocalisations_;
   ROS_INFO_STREAM("geofusion: keyframe "
@@ -434,6 +442,15 @@ void SceneEstimatorNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   status.add("last keyframe: stage II", toString(last_.stage_two.status));
   status.add("failed optimisation stages", failed_stages_);
   status.add("relocalisations", relocalisations_);
+  for (const char* d : {"no_gain", "beyond_drift", "ambiguous"}) {
+    const auto it = relocalisations_refused_.find(d);
+    status.add(std::string("relocalisations refused: ") + d,
+               it == relocalisations_refused_.end() ? 0 : it->second);
+  }
+  for (const char* reason : {"candidate_timeout", "seen_absent", "merged"}) {
+    const auto it = removals_.find(reason);
+    status.add(std::string("objects removed: ") + reason, it == removals_.end() ? 0 : it->second);
+  }
   status.add("last keyframe ms: consistency", t.consistency_ms);
   status.add("last keyframe ms: association", t.association_ms);
   status.add("last keyframe ms: lifecycle", t.lifecycle_ms);

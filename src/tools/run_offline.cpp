@@ -18,6 +18,7 @@
 // results.
 #include "command_line.h"
 #include "config_option.h"
+#include "geofusion/common/ingestion.h"
 #include "geofusion/common/robot_names.h"
 #include "geofusion/config/config.h"
 #include "geofusion/estimation/run_results.h"
@@ -462,6 +463,9 @@ int main(int argc, char** argv) {
       results.final_map.contacts.size(), results.wall_time_s, duration,
       duration > 0 ? results.wall_time_s / duration : 0.0, opt.out.c_str());
   std::printf("run_offline: detections: %s\n", pipeline.tally().summary().c_str());
+  std::printf("run_offline: objects removed: %s; relocalisation searched: %s\n",
+              reasonsLine(removalsByReason(results)).c_str(),
+              reasonsLine(relocalisationsByDecision(results)).c_str());
   if (vision.counts().messages + vision.counts().rejected > 0) {
     std::printf(
         "run_offline: vision_msgs detections: %zu messages, %zu detections converted%s%s\n",

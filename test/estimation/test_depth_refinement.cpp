@@ -185,6 +185,59 @@ TEST_F(DepthRefinementTest, AStreamBiasedAlongTheRayIsReportedUnlessRefined) {
   EXPECT_EQ(refined.objects.size(), 4u);
 }
 
+// Issue 32: a detection 3 cm behind the observed surface renders as almost all hidden (r_occ
+// near 1): the inlier ratio of the few points left is no measure of the start pose. The
+// refinement is judged by the consistency score then, and accepted.
+TEST_F(DepthRefinementTest, ADetectionBehindTheSurfaceIsRefinedAndAccepted) {
+  const int flat = scene.place("009_gelatin_box", 0.02, 0.02, 0.5);
+  const int pudding = scene.place("008_pudding_box", -0.16, -0.02, -0.2);
+  const int can = scene.place("005_tomato_soup_can", 0.17, 0.05);
+  scene.renderObserved();
+  int hidden_starts = 0;
+  for (int i : {flat, pudding, can}) {
+    for (double along : {0.03, 0.026, 0.029}) {
+      SCOPED_TRACE(scene.object(i).model->name + " " + std::to_string(along));
+      const Eigen::Isometry3d truth = scene.cameraPose(i);
+      const Eigen::Isometry3d behind = offRay(truth, along, Eigen::Vector3d::UnitX(), 0.0);
+      const DepthRefinement r = refine(i, behind);
+      ASSERT_EQ(r.outcome, RefinementOutcome::kAccepted)
+          << toString(r.outcome) << ": before r_in " << r.before.r_in << " r_occ "
+          << r.before.r_occ << ", corrected by " << r.correction_translation_m << " m";
+      EXPECT_LT((r.T_cam_obj.translation() - truth.translation()).norm(), 0.005);
+      EXPECT_GT(r.after.score, r.before.score);
+      if (r.before.r_occ > 0.75) ++hidden_starts;
+    }
+  }
+  EXPECT_GT(hidden_starts, 0) << "no start pose was mostly hidden: the case is not exercised";
+}
+
+// The acceptance on its own: r_in decides when enough of the start pose is unhidden, the score
+// when almost all of it is hidden (r_in of a handful of points).
+TEST(RefinementAcceptance, JudgesAMostlyHiddenStartByTheScore) {
+  ConsistencyResult before;
+  before.determined = true;
+  before.rendered = 1000, before.missing = 0, before.occluded = 996, before.inliers = 4;
+  before.r_in = 1.0, before.r_occ = 0.996, before.score = 0.01;
+  ConsistencyResult after = before;
+  after.occluded = 10, after.inliers = 950, after.outliers = 10, after.uncertain = 30;
+  after.r_in = 950.0 / 990.0, after.r_occ = 0.01, after.score = 0.9;
+  const DepthRefinementConfig config;
+  EXPECT_TRUE(improves(before, after, config));
+  DepthRefinementConfig r_in_always;  // the rule before issue 32: r_in 1 can never be beaten
+  r_in_always.min_visible_share = 0.0;
+  EXPECT_FALSE(improves(before, after, r_in_always));
+  EXPECT_FALSE(improves(after, before, config));  // worse by the score too
+  // Enough of the start pose unhidden: r_in is defined and decides.
+  ConsistencyResult visible = before;
+  visible.occluded = 500, visible.inliers = 480, visible.outliers = 20;
+  visible.r_in = 0.96, visible.r_occ = 0.5, visible.score = 0.2;
+  EXPECT_FALSE(improves(visible, after, config));  // r_in 0.96 -> 0.96: no gain
+  after.r_in = 0.98;
+  EXPECT_TRUE(improves(visible, after, config));
+  after.determined = false;
+  EXPECT_FALSE(improves(visible, after, config));
+}
+
 // A refined measurement is tight along its ray and keeps the detector's std across it.
 TEST(RayAlignedSqrtInformation, IsTightAlongTheRayOnly) {
   const Eigen::Vector3d p(0.3, -0.1, 0.9);

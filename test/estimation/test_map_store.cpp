@@ -39,11 +39,15 @@ class MapStoreTest : public ::testing::Test {
       ObjectEstimate o;
       o.id = 100 + i;
       o.model = models.models()[static_cast<std::size_t>(i) % models.size()];
-      o.T_map_obj.translation() = Eigen::Vector3d(0.1 * i, 0.0, 0.8);
+      o.T_map_obj.linear() =
+          Eigen::AngleAxisd(0.3 + 0.7 * i, Eigen::Vector3d(1.0, 0.5 * i, 2.0).normalized())
+              .toRotationMatrix();
+      o.T_map_obj.translation() = Eigen::Vector3d(0.1 * i, -0.0123 * i, 0.8 + 0.001 * i);
       o.measurements = 5 + i;
       o.best_consistency = 0.8;
       r.final_map.objects.push_back(o);
     }
+    r.T_map_odom.linear() = Eigen::AngleAxisd(0.05 * n, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     r.T_map_odom.translation() = Eigen::Vector3d(0.01 * n, 0.0, 0.0);
     return r;
   }
@@ -94,6 +98,18 @@ TEST_F(MapStoreTest, SavesAndLoadsObjectsBackgroundAndMapToOdom) {
   ASSERT_TRUE(loadMap(prefix + ".yaml", models, &r, &f, &error)) << error;
   EXPECT_EQ(r.final_map.objects[2].id, 102);
   EXPECT_EQ(r.final_map.objects[2].measurements, 7);
+  // Every object comes back with its class and its full pose, and map -> odom with its rotation.
+  const RunResults saved = mapOf(3);
+  ASSERT_EQ(r.final_map.objects.size(), saved.final_map.objects.size());
+  for (std::size_t i = 0; i < saved.final_map.objects.size(); ++i) {
+    const ObjectEstimate &a = saved.final_map.objects[i], &b = r.final_map.objects[i];
+    EXPECT_EQ(b.id, a.id);
+    EXPECT_EQ(b.model, a.model);
+    EXPECT_TRUE(b.T_map_obj.isApprox(a.T_map_obj, 1e-9)) << "object " << a.id << ":\n"
+                                                         << b.T_map_obj.matrix();
+    EXPECT_NEAR(b.best_consistency, a.best_consistency, 1e-9);
+  }
+  EXPECT_TRUE(r.T_map_odom.isApprox(saved.T_map_odom, 1e-9)) << r.T_map_odom.matrix();
   // A second save replaces the first; the old background goes.
   ASSERT_TRUE(saveMap(prefix, mapOf(5), backgroundOf(5), &f, &error)) << error;
   EXPECT_EQ(files().size(), 2u);

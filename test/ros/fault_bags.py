@@ -112,6 +112,41 @@ def shifted_detection_stamps(src_path, out_path, shift_s=0.5):
     _copy(src_path, out_path, change)
 
 
+def odometry_starts_late(src_path, out_path, delay_s=1.0, odom_frame='odom'):
+    """The odom -> base transforms of the first `delay_s` seconds removed: a robot whose
+    odometry comes up after the camera (no camera pose for those frames, not a gap). Returns the
+    stamp of the first transform kept."""
+    begin, _ = _recording_start(src_path)
+    first = begin + delay_s
+
+    def change(topic, msg, t):
+        if topic == '/tf':
+            msg.transforms = [x for x in msg.transforms
+                              if not (x.header.frame_id == odom_frame and
+                                      x.header.stamp.to_sec() < first)]
+            if not msg.transforms:
+                return []
+        return [(topic, msg, t)]
+    _copy(src_path, out_path, change)
+    return first
+
+
+def broken_depth(src_path, out_path, every=4):
+    """Every `every`-th depth image cut to half its bytes (a driver that sent a partial frame):
+    unusable depth. Returns how many."""
+    state = {'n': 0, 'broken': 0}
+
+    def change(topic, msg, t):
+        if 'depth' in topic and msg._type == 'sensor_msgs/Image':
+            state['n'] += 1
+            if state['n'] % every == 0:
+                msg.data = msg.data[:len(msg.data) // 2]
+                state['broken'] += 1
+        return [(topic, msg, t)]
+    _copy(src_path, out_path, change)
+    return state['broken']
+
+
 def truncated(src_path, out_path, fraction=0.6):
     """The first `fraction` of the file's bytes: a recording killed before it closed."""
     with open(src_path, 'rb') as f:

@@ -64,6 +64,25 @@ class OfflineFaultsTest(unittest.TestCase):
         inside = [k for k in res['keyframes'] if g0 < float(k['stamp']) < g1]
         self.assertEqual(inside, [], 'keyframes made inside the odometry gap')
 
+    def test_frames_before_the_odometry_have_no_camera_pose(self):
+        bag = self.faulty('late_odometry')
+        first = fault_bags.odometry_starts_late(self.good, bag, delay_s=1.0)
+        rc, text, res, _, _ = self.run_offline(bag, 'late_odometry')
+        self.assertEqual(rc, 0, text)
+        self.assertGreater(res['frames_dropped'].get('no camera pose', 0), 0, text)
+        self.assertNotIn('odometry gap', res['frames_dropped'])
+        early = [k for k in res['keyframes'] if float(k['stamp']) < first - 0.05]
+        self.assertEqual(early, [], 'keyframes made before the odometry started')
+
+    def test_a_broken_depth_image_is_unusable_depth(self):
+        bag = self.faulty('broken_depth')
+        broken = fault_bags.broken_depth(self.good, bag)
+        self.assertGreater(broken, 0)
+        rc, text, res, _, _ = self.run_offline(bag, 'broken_depth')
+        self.assertEqual(rc, 0, text)
+        self.assertEqual(res['frames_dropped'].get('unusable depth', 0), broken, text)
+        self.assertEqual(res['frames_skipped'], sum(res['frames_dropped'].values()))
+
     def test_late_detections_are_counted_out_of_order(self):
         bag = self.faulty('late')
         delayed = fault_bags.late_detections(self.good, bag)

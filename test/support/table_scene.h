@@ -140,6 +140,8 @@ class TableScene {
   /// Takes object i away (or puts it back); renderObserved() shows the change.
   void setHidden(int i, bool hidden) { objects_[i].hidden = hidden; }
   void move(int i, const Eigen::Isometry3d& T_world_obj) { objects_[i].T_world_obj = T_world_obj; }
+  /// Moves the camera (renderObserved() shows the scene from there).
+  void setCamera(const Eigen::Isometry3d& T_world_cam) { T_world_cam_ = T_world_cam; }
   RenderedImages& observed() { return observed_; }
   const PinholeIntrinsics& K() const { return K_; }
   const Eigen::Isometry3d& T_world_cam() const { return T_world_cam_; }

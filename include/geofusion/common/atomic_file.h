@@ -1,6 +1,10 @@
-// Writing a file so that no reader ever sees half of it: write `<path>.tmp`, then rename it over
-// `path`. Private to the core.
+// Writing a file so that no reader ever sees half of it, even after a power loss: write
+// `<path>.tmp`, flush it to the disk (fsync), rename it over `path`, then flush the directory so
+// that the rename itself is on the disk. Private to the core.
 #pragma once
+
+#include <fcntl.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <functional>
@@ -8,7 +12,24 @@
 
 namespace geofusion {
 
-/// Calls write(tmp_path) and, when it succeeds, renames the temporary file to `path`.
+/// fsync() of a file or directory opened read-only; false when it cannot be opened or synced.
+inline bool syncToDisk(const std::string& path, bool directory = false) {
+  const int fd = ::open(path.c_str(), O_RDONLY | (directory ? O_DIRECTORY : 0));
+  if (fd < 0) return false;
+  const bool ok = ::fsync(fd) == 0;
+  ::close(fd);
+  return ok;
+}
+
+/// The directory holding `path` ("." for a bare file name).
+inline std::string directoryOf(const std::string& path) {
+  const std::size_t slash = path.find_last_of('/');
+  if (slash == std::string::npos) return ".";
+  return slash == 0 ? "/" : path.substr(0, slash);
+}
+
+/// Calls write(tmp_path) and, when it succeeds, syncs the temporary file, renames it to `path`
+/// and syncs the directory.
 inline bool writeFileAtomically(const std::string& path,
                                 const std::function<bool(const std::string&)>& write,
                                 std::string* error) {
@@ -18,9 +39,18 @@ inline bool writeFileAtomically(const std::string& path,
     if (error) *error = "cannot write " + tmp;
     return false;
   }
+  if (!syncToDisk(tmp)) {
+    std::remove(tmp.c_str());
+    if (error) *error = "cannot flush " + tmp + " to the disk";
+    return false;
+  }
   if (std::rename(tmp.c_str(), path.c_str()) != 0) {
     std::remove(tmp.c_str());
     if (error) *error = "cannot rename " + tmp + " to " + path;
+    return false;
+  }
+  if (!syncToDisk(directoryOf(path), true)) {
+    if (error) *error = "cannot flush the directory of " + path + " to the disk";
     return false;
   }
   return true;

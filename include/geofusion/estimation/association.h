@@ -29,6 +29,10 @@ struct AssociationConfig {
   double merge_min_penetration_m = 0.01;
   /// ... or at least this share of the thinner object's smallest extent, if less.
   double merge_thin_fraction = 0.3;
+  /// Objects of two classes merge only when they interpenetrate by at least this share of the
+  /// thinner object's smallest extent (a look-alike reported in place of the object): a real
+  /// object differs from its mesh by millimetres, so real neighbours overlap a little.
+  double merge_cross_class_fraction = 0.5;
   /// true: one Hungarian assignment per keyframe (all measurements jointly); false: the paper's
   /// greedy order (a later measurement that wants a taken object starts a new one).
   bool joint_assignment = true;

@@ -43,8 +43,13 @@ struct DepthRefinementConfig {
   double converged_rotation_rad = 0.01;
   /// Levenberg-Marquardt damping of the Gauss-Newton steps (share of the diagonal).
   double damping = 0.2;
-  /// Accepted only when the consistency score's inlier ratio improves by more than this.
+  /// Accepted only when the consistency score's inlier ratio improves by more than this ...
   double min_inlier_gain = 0.0;
+  /// ... when at least this share of the start's and of the refined pose's rendered points
+  /// (with an observed depth) is not hidden; below, the inlier ratio is undefined and the
+  /// refined pose is accepted when its consistency score f_gc is higher (a start pose behind the
+  /// observed surface).
+  double min_visible_share = 0.25;
   /// Translation std of a refined measurement along the viewing ray (stage I); across the ray
   /// and in rotation the detector's own (stage_one.measurement_sigma_*) stays.
   double ray_sigma_m = 0.004;
@@ -78,6 +83,11 @@ struct DepthRefinement {
 
 /// Refines detections against a depth image with the scorer's renderer (one rendering to align,
 /// one to re-score a refined pose). Not for concurrent use.
+/// The refinement's acceptance: `after` (the refined pose) against `before` (the detection),
+/// see DepthRefinementConfig::min_inlier_gain and min_visible_share.
+bool improves(const ConsistencyResult& before, const ConsistencyResult& after,
+              const DepthRefinementConfig& config);
+
 class DepthRefiner {
  public:
   DepthRefiner(ConsistencyScorer* scorer, const DepthRefinementConfig& config);

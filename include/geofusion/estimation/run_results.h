@@ -39,6 +39,13 @@ struct RunResults {
   Eigen::Isometry3d T_map_odom = Eigen::Isometry3d::Identity();
 };
 
+/// Objects removed over the run's keyframes by reason (RemovalReason's words, zeros included).
+std::vector<std::pair<std::string, std::size_t>> removalsByReason(const RunResults& results);
+/// Keyframes whose relocalisation searched, by decision (applied, no_gain, beyond_drift,
+/// ambiguous; zeros included).
+std::vector<std::pair<std::string, std::size_t>> relocalisationsByDecision(
+    const RunResults& results);
+
 /// Optimisation stages (keyframes and the final map) whose solve failed, their result not used.
 int failedStages(const RunResults& results);
 

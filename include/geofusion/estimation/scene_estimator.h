@@ -174,6 +174,21 @@ struct DetectionReport {
   int object = -1;  ///< the object (or candidate) id it went to
 };
 
+/// Why an object (or candidate) left the map.
+enum class RemovalReason {
+  kCandidateTimeout,  ///< a candidate (false-positive score above eps_fp) unseen for too long
+  kSeenAbsent,        ///< the depth showed free space where it stood (lifecycle.*)
+  kMerged,            ///< merged into an overlapping object (`into`)
+};
+const char* toString(RemovalReason reason);
+bool parseRemovalReason(const std::string& name, RemovalReason* reason);
+
+struct Removal {
+  int id = -1;
+  RemovalReason reason = RemovalReason::kCandidateTimeout;
+  int into = -1;  ///< kMerged: the object it went into
+};
+
 struct KeyframeResult {
   int keyframe = -1;
   double stamp_s = 0.0;
@@ -182,6 +197,7 @@ struct KeyframeResult {
   /// Objects seen but not (yet) confirmed: not part of the map, shown for inspection only.
   std::vector<ObjectEstimate> tentative;
   std::vector<int> removed_ids;  ///< objects removed or merged away at this keyframe
+  std::vector<Removal> removals;  ///< ... each with its reason, in the same order
   /// Contacts among `objects` (indices into it; -1 = the support plane).
   std::vector<FeatureContact> contacts;
   std::vector<DetectionReport> detections;  ///< per input detection, in order
@@ -259,6 +275,7 @@ class SceneEstimator {
     Eigen::Vector3d box_half = Eigen::Vector3d::Zero();
     /// How much the depth supported it over all its measurements: the sum of their f_gc.
     double depthEvidence() const;
+    double meanConsistency() const;  ///< depthEvidence() a measurement
   };
 
   /// The keyframe's detections with the models of their classes and their scores.
@@ -273,6 +290,7 @@ class SceneEstimator {
 
   Eigen::Isometry3d appendCameraPose(const Keyframe& keyframe);
   Relocalisation relocaliseCamera(const ScoredDetections& detections);
+  OdometryDrift driftSinceAnchor(const std::vector<LabelledPoint>& seen) const;
   ScoredDetections scoreDetections(const Keyframe& keyframe) const;
   std::vector<DetectionReport> reportDetections(const Keyframe& keyframe,
                                                 const ScoredDetections& detections,
@@ -294,10 +312,12 @@ class SceneEstimator {
   /// Tracks in the map: confirmed ones (all for methods without false-positive removal).
   std::vector<std::size_t> reportedTracks() const;
   void removeFalsePositives(const std::vector<int>& touched, int keyframe,
-                            std::vector<int>* removed);
-  void mergeOverlapping(std::vector<int>* removed);
+                            std::vector<Removal>* removed);
+  void mergeOverlapping(std::vector<Removal>* removed);
+  bool mappedTwice(const Track& a, const Track& b) const;
+  static void absorb(const Track& dropped, Track* kept);
   void removeObjectsSeenAbsent(const Keyframe& keyframe, const std::vector<int>& measured,
-                               std::vector<int>* removed);
+                               std::vector<Removal>* removed);
   bool stageOneDue(int t) const;
   StageReport runStageOne();
   void adaptNoise(const std::vector<std::size_t>& reported,
@@ -332,6 +352,9 @@ class SceneEstimator {
   /// T_odom_cam_ = T_odom_fix_ x the robot's odometry: relocalisations replace the increments
   /// they correct.
   Eigen::Isometry3d T_odom_fix_ = Eigen::Isometry3d::Identity();
+  /// The last keyframe whose detections agreed with the map (or that was relocalised): the
+  /// odometry's drift is counted from it. -1: unknown (a resumed map not yet relocalised).
+  int relocalisation_anchor_ = 0;
   SupportPlane support_;
   std::shared_ptr<ObjectModel> support_model_;
   Eigen::Isometry3d T_map_support_ = Eigen::Isometry3d::Identity();

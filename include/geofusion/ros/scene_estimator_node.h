@@ -24,6 +24,7 @@
 #include <boost/thread/recursive_mutex.hpp>
 
 #include <atomic>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -75,6 +76,9 @@ class SceneEstimatorNode {
   std::size_t keyframes_ = 0;
   std::size_t failed_stages_ = 0;    // optimisation stages whose result was not used
   std::size_t relocalisations_ = 0;  // keyframes whose camera was relocalised against the map
+  // Searches refused, by decision (no_gain, beyond_drift, ambiguous), and objects removed by
+  // reason (candidate_timeout, seen_absent, merged), since the start.
+  std::map<std::string, std::size_t> relocalisations_refused_, removals_;
 
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
