@@ -8,14 +8,14 @@
 # test/fuzz/regressions/<target>/ (test_fuzz_regressions runs those in every `make test`).
 #   FUZZ_RUNS=N         executions per target (default 1000000)
 #   FUZZ_MAX_TIME=S     and at most this many seconds per target (default 600)
-#   FUZZ_TARGETS="..."  a subset of: detections model_set config mesh bag
+#   FUZZ_TARGETS="..."  a subset of: detections vision_detections model_set config mesh bag
 #   GEOFUSION_MSG_INCLUDE=DIR  a workspace's devel/include with the generated message headers
 #                       (default: build the normal workspace with scripts/build.sh and use its own)
 set -euo pipefail
 source "$(dirname "$0")/env.sh"
 runs="${FUZZ_RUNS:-1000000}"
 max_time="${FUZZ_MAX_TIME:-600}"
-read -r -a targets <<< "${FUZZ_TARGETS:-detections model_set config mesh bag}"
+read -r -a targets <<< "${FUZZ_TARGETS:-detections vision_detections model_set config mesh bag}"
 root="${GEOFUSION_FUZZ_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/geofusion/fuzz}"
 fuzz_src="$GEOFUSION_SRC/test/fuzz"
 

@@ -122,7 +122,6 @@ bool checkWritable(const std::string& path, std::string* error) {
   return true;
 }
 
-// What a reader of a broken bag should do next.
 // A vision_msgs/Detection3DArray of the bag as the package's DetectionArray (null, with the
 // reason, when it is of another layout or does not decode).
 geofusion::DetectionArrayConstPtr fromVisionMsgs(const rosbag::MessageInstance& m,
@@ -138,6 +137,7 @@ geofusion::DetectionArrayConstPtr fromVisionMsgs(const rosbag::MessageInstance& 
   return out;
 }
 
+// What a reader of a broken bag should do next.
 std::string bagHint(const std::string& bag) {
   return " (a truncated or unindexed bag, e.g. a recording killed before it closed? `rosbag "
          "reindex " +

@@ -170,6 +170,39 @@ TEST(Relocalisation, ARevisitMeasuresTheMappedObjects) {
   EXPECT_GT(decisions.front().mahalanobis_sq, 18.47);
 }
 
+// A saved map resumed by a robot whose odometry restarted elsewhere: map -> odom as given is off
+// by 8 degrees and 25 cm. With no drift known since a restart, the first keyframe is relocalised
+// without a gate; the map keeps its objects and ids, and the camera is where it truly is.
+TEST(Relocalisation, AResumedMapIsRelocalisedAtItsFirstKeyframe) {
+  const ModelSet models = ModelSet::builtinPrimitives();
+  test::TableScene scene(models);
+  const char* names[] = {"003_cracker_box", "005_tomato_soup_can", "061_foam_brick",
+                         "004_sugar_box", "025_mug"};
+  const double xy[][2] = {{-0.14, 0.05}, {0.02, 0.15}, {0.13, -0.04}, {0.16, 0.12}, {-0.05, -0.08}};
+  for (int i = 0; i < 5; ++i) scene.place(names[i], xy[i][0], xy[i][1], 0.3 * i);
+  scene.renderObserved();
+  SceneEstimator first(models, EstimatorConfig(), test::sharedRenderer());
+  for (int t = 0; t < 12; ++t) first.addKeyframe(scene.keyframe(t, {0, 1, 2, 3, 4}));
+  const KeyframeResult saved = first.finish();
+  ASSERT_EQ(saved.objects.size(), 5u);
+  // After the restart the odometry frame is somewhere else: odom = offset x world.
+  const Eigen::Isometry3d offset = headingShift(8.0, Eigen::Vector3d(0.25, -0.1, 0.0));
+  SceneEstimator resumed(models, EstimatorConfig(), test::sharedRenderer());
+  ASSERT_TRUE(resumed.resume(saved.objects, Eigen::Isometry3d::Identity()));
+  KeyframeResult r = resumed.addKeyframe(scene.keyframe(20, {0, 1, 2, 3, 4}, offset));
+  EXPECT_TRUE(r.relocalisation.applied) << toString(r.relocalisation.decision);
+  EXPECT_FALSE(std::isfinite(r.relocalisation.drift.sigma_m));  // no gate after a restart
+  for (int t = 21; t < 26; ++t) r = resumed.addKeyframe(scene.keyframe(t, {0, 1, 2, 3, 4}, offset));
+  EXPECT_LT((r.T_map_cam.translation() - scene.T_world_cam().translation()).norm(), 0.01);
+  ASSERT_EQ(r.objects.size(), 5u);
+  EXPECT_EQ(inPlace(scene, 5, r), 5);
+  for (const ObjectEstimate& o : saved.objects) {
+    EXPECT_TRUE(std::any_of(r.objects.begin(), r.objects.end(),
+                            [&](const ObjectEstimate& x) { return x.id == o.id; }))
+        << "object " << o.id << " lost its id";
+  }
+}
+
 // Two identical groups of four objects side by side (a shelf of repeated products): the group
 // seen through a drifted camera matches either group equally well. Refused as ambiguous; with
 // the second group gone the same detections are relocalised.

@@ -1,7 +1,9 @@
 #include "fuzz_targets.h"
 
 #include "geofusion/estimation/frame_by_frame.h"
+#include "geofusion/model/object_model.h"
 #include "geofusion/ros/conversions.h"
+#include "geofusion/ros/vision_detections.h"
 
 #include <geofusion/DetectionArray.h>
 #include <ros/serialization.h>
@@ -12,6 +14,7 @@
 #include <sensor_msgs/Image.h>
 #include <tf2_msgs/TFMessage.h>
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -21,6 +24,14 @@ namespace fuzz {
 int fuzzBag(const std::uint8_t* data, std::size_t size) {
   const std::string path = writeScratchFile("input.bag", data, size);
   const FrameByFrame checker;
+  static const std::map<std::int64_t, ModelClass> class_map = [] {
+    std::map<std::int64_t, ModelClass> map;
+    std::string error;
+    FUZZ_CHECK(makeVisionClassMap("", ModelSet::builtinPrimitives(), &map, &error));
+    return map;
+  }();
+  std::string error;
+  VisionDetectionConverter vision(class_map);
   try {
     rosbag::Bag bag;
     bag.open(path, rosbag::bagmode::Read);
@@ -44,6 +55,21 @@ int fuzzBag(const std::uint8_t* data, std::size_t size) {
         DetectionTally tally;
         checker.process(fromMsg(*detections), Eigen::Isometry3d::Identity(), &tally);
         FUZZ_CHECK(tally.accepted + tally.totalSkipped() == detections->detections.size());
+      } else if (m.getDataType() == kVisionDetectionsType) {
+        // As run_offline: the message's bytes through the hand-written vision_msgs reader.
+        std::vector<std::uint8_t> bytes(m.size());
+        ros::serialization::OStream stream(bytes.data(), static_cast<std::uint32_t>(bytes.size()));
+        m.write(stream);
+        geofusion::DetectionArray converted;
+        const std::size_t before = vision.counts().messages + vision.counts().rejected;
+        const bool ok = vision.convert(m.getDataType(), m.getMD5Sum(), bytes.data(), bytes.size(),
+                                       &converted, &error);
+        FUZZ_CHECK(vision.counts().messages + vision.counts().rejected == before + 1);
+        if (ok) {
+          DetectionTally tally;
+          checker.process(fromMsg(converted), Eigen::Isometry3d::Identity(), &tally);
+          FUZZ_CHECK(tally.accepted + tally.totalSkipped() == converted.detections.size());
+        }
       } else if (const auto tf = m.instantiate<tf2_msgs::TFMessage>()) {
         for (const auto& t : tf->transforms) (void)t.header.stamp.toSec();
       }

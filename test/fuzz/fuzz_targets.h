@@ -38,6 +38,10 @@ int fuzzMesh(const std::uint8_t* data, std::size_t size);
 /// The bytes as a bag file read as run_offline reads one: rosbag::View over every message,
 /// instantiating the input types and converting them.
 int fuzzBag(const std::uint8_t* data, std::size_t size);
+/// The bytes as a serialised vision_msgs/Detection3DArray (the hand-written reader of
+/// vision_detections.h): decoded, re-encoded and decoded the same, converted with the
+/// primitives' class ids, every detection used or counted dropped.
+int fuzzVisionDetections(const std::uint8_t* data, std::size_t size);
 
 /// Writes the bytes to `name` in this process's scratch folder (made on first use, removed at
 /// exit) and returns the file's path.

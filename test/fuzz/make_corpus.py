@@ -9,6 +9,7 @@ rest is made here, deterministically."""
 import io
 import os
 import shutil
+import struct
 import sys
 
 import rosbag
@@ -54,6 +55,35 @@ def short_definition(text):
     return '\n'.join(line for line in lines if line) + '\n'
 
 
+def vision_header(frame, seq=1, secs=100, nsecs=500000000):
+    return struct.pack('<III', seq, secs, nsecs) + struct.pack('<I', len(frame)) + frame.encode()
+
+
+def vision_array(frame, dets):
+    """The serialised bytes of a Noetic vision_msgs/Detection3DArray (vision_msgs is not a
+    dependency): `dets` per detection a list of (class id, score, xyz, quaternion xyzw)."""
+    out = vision_header(frame) + struct.pack('<I', len(dets))
+    for hyps in dets:
+        out += vision_header(frame) + struct.pack('<I', len(hyps))
+        for class_id, score, xyz, q in hyps:
+            out += struct.pack('<qd', class_id, score) + struct.pack('<7d', *xyz, *q)
+            out += struct.pack('<36d', *([0.0] * 36))
+        out += struct.pack('<7d', 0, 0, 0, 0, 0, 0, 1) + struct.pack('<3d', 0, 0, 0)  # bbox
+        out += vision_header('', 0, 0, 0) + struct.pack('<III', 0, 0, 0) + b'\x00'  # cloud
+        out += struct.pack('<III', 0, 0, 0) + b'\x01'
+    return out
+
+
+VISION_MD5 = '05c51d9aea1fb4cfdc8effb94f197b6f'
+
+
+class VisionType:
+    """What rosbag's raw write needs of a message class."""
+    _type = 'vision_msgs/Detection3DArray'
+    _md5sum = VISION_MD5
+    _full_text = 'see vision_msgs (Noetic)'
+
+
 def main():
     out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(HERE, 'corpus')
     t = rospy.Time(100, 500000000)
@@ -68,6 +98,15 @@ def main():
     write(out, 'detections', 'empty', serialised(detections(t, [])))
     write(out, 'detections', 'three', serialised(detections(t, three)))
     write(out, 'detections', 'faulty', serialised(detections(t, faulty)))
+    unit = (0.0, 0.0, 0.0, 1.0)
+    write(out, 'vision_detections', 'empty', vision_array(FRAME, []))
+    write(out, 'vision_detections', 'three', vision_array(FRAME, [
+        [(2, 0.9, (0.1, -0.05, 0.8), (0.0, 0.0, 0.7071068, 0.7071068)), (9, 0.3, (0.1, 0, 0.8), unit)],
+        [(4, 0.6, (-0.2, 0.1, 1.2), unit)],
+        [(999, 0.7, (0.0, 0.0, 0.5), unit)]]))
+    write(out, 'vision_detections', 'faulty', vision_array('', [
+        [], [(3, 0.8, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0, 0.0))],
+        [(3, float('nan'), (0.0, 0.0, 1.0), unit)], [(21, 0.5, (float('inf'), 0.0, 1.0), unit)]]))
 
     write(out, 'model_set', 'primitives.yaml', """name: seeds
 classes:
@@ -184,6 +223,14 @@ end_header
                     bag.write(topic, msg, stamp, connection_header={
                         'topic': topic, 'type': msg._type, 'md5sum': msg._md5sum,
                         'message_definition': short_definition(msg._full_text)})
+    # A bag with a vision_msgs/Detection3DArray (written raw: vision_msgs is not a dependency).
+    path = os.path.join(out, 'bag', 'vision.bag')
+    with rosbag.Bag(path, 'w') as bag:
+        data = vision_array(FRAME, [[(2, 0.9, (0.1, -0.05, 0.8), unit)], [(999, 0.5, (0, 0, 1), unit)]])
+        bag.write('/detections_3d', ('vision_msgs/Detection3DArray', data, VISION_MD5, None, VisionType),
+                  rospy.Time(100, 0), raw=True, connection_header={
+                      'topic': '/detections_3d', 'type': 'vision_msgs/Detection3DArray',
+                      'md5sum': VISION_MD5, 'message_definition': 'see vision_msgs (Noetic)'})
     for target in sorted(os.listdir(out)):
         files = sorted(os.listdir(os.path.join(out, target)))
         print('%s: %s' % (target, ', '.join('%s (%d B)' % (f, os.path.getsize(

@@ -53,6 +53,9 @@ TEST(FuzzRegressions, Detections) {
 TEST(FuzzRegressions, ModelSet) {
   runAll("model_set", fuzzModelSet);
 }
+TEST(FuzzRegressions, VisionDetections) {
+  runAll("vision_detections", fuzzVisionDetections);
+}
 TEST(FuzzRegressions, Config) {
   runAll("config", fuzzConfig);
 }
