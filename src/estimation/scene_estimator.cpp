@@ -606,11 +606,6 @@ double SceneEstimator::Track::depthEvidence() const {
   return sum;
 }
 
-double SceneEstimator::Track::meanConsistency() const {
-  return observations.empty() ? best_consistency
-                              : depthEvidence() / static_cast<double>(observations.size());
-}
-
 // Whether A and B are one object mapped twice (the paper's overlap test, issue 32): their boxes
 // overlap by more than merge_ratio and their hulls interpenetrate by more than neighbours in
 // clutter can. Thin objects (markers, scissors) cannot interpenetrate by much: the bound scales
@@ -658,16 +653,13 @@ void SceneEstimator::mergeOverlapping(std::vector<Removal>* removed) {
         if (!mappedTwice(A, B)) continue;
         // Two of one class: the one with the higher false-positive score goes into the other (the
         // paper). Two classes (a look-alike reported for a stretch, a persistent phantom beside a
-        // real object): the one the depth supported more over all its measurements stays, and
-        // only when the depth supports it at least as well a measurement: else both stay.
+        // real object): the one the depth supported more over all its measurements stays.
         const bool same_class = A.model->name == B.model->name;
         const bool keep_a = same_class
                                 ? falsePositiveScore(A.best_consistency, A.measurementCount()) <=
                                       falsePositiveScore(B.best_consistency, B.measurementCount())
                                 : A.depthEvidence() >= B.depthEvidence();
         const std::size_t keep = keep_a ? a : b, drop = keep_a ? b : a;
-        if (!same_class && tracks_[keep].meanConsistency() < tracks_[drop].meanConsistency())
-          continue;
         if (same_class) absorb(tracks_[drop], &tracks_[keep]);
         removed->push_back({tracks_[drop].id, RemovalReason::kMerged, tracks_[keep].id});
         tracks_.erase(tracks_.begin() + static_cast<std::ptrdiff_t>(drop));

@@ -15,6 +15,7 @@ import rospy
 import rostest
 import yaml
 from dynamic_reconfigure.client import Client
+from geofusion.msg import ObjectMap
 from geofusion.srv import SaveMap
 from std_srvs.srv import Trigger
 
@@ -118,6 +119,50 @@ class ConfigTest(unittest.TestCase):
             self.assertLess(worst, 1e-6)
             self.assertEqual(len(node['final_map']['contacts']),
                              len(offline['final_map']['contacts']))
+        finally:
+            shutil.rmtree(d, ignore_errors=True)
+
+    def test_5_initial_map_continues_a_saved_map_or_refuses_to_start(self):
+        """~initial_map: a plain node started with a saved map publishes it (same ids, classes
+        and poses) before any input; a map that cannot be loaded stops the start with why."""
+        d = tempfile.mkdtemp(prefix='geofusion_initial_map_')
+        try:
+            subprocess.check_call([util.find_tool('generate_dataset'), '--suite', 'demo',
+                                   '--out-dir', d, '--keyframes', '12', '--previews', '0'],
+                                  stdout=subprocess.DEVNULL)
+            prefix = os.path.join(d, 'saved')
+            subprocess.check_call([util.find_tool('run_offline'), '--bag',
+                                   os.path.join(d, 'demo_01.bag'), '--out',
+                                   os.path.join(d, 'offline.yaml'), '--model-set', 'primitives',
+                                   '--save-map', prefix, '--quiet'], stdout=subprocess.DEVNULL)
+            saved = util.load_yaml(prefix + '.yaml')['final_map']['objects']
+            self.assertGreater(len(saved), 0)
+            name = 'resumed_%d' % int(time.time() * 1000)
+            maps = []
+            sub = rospy.Subscriber('/%s/object_map' % name, ObjectMap, maps.append, queue_size=10)
+            node = subprocess.Popen([util.find_tool('scene_estimator_node'), '__name:=' + name,
+                                     '_model_set:=primitives', '_initial_map:=' + prefix],
+                                    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+            try:
+                self.assertTrue(self.wait_for(lambda: maps, timeout_s=60),
+                                'no map from a node started with ~initial_map')
+            finally:
+                node.terminate()
+                log = node.communicate(timeout=30)[0]
+                sub.unregister()
+            got = sorted((o.id, o.class_name) for o in maps[0].objects)
+            self.assertEqual(got, sorted((o['id'], o['class_name']) for o in saved), log)
+            by_id = {o.id: o for o in maps[0].objects}
+            for o in saved:
+                p = by_id[o['id']].pose.pose.position
+                self.assertAlmostEqual(p.x, o['map_object'][0], places=6)
+                self.assertAlmostEqual(p.y, o['map_object'][1], places=6)
+                self.assertAlmostEqual(p.z, o['map_object'][2], places=6)
+            code, log = self.run_node('_model_set:=primitives',
+                                      '_initial_map:=' + os.path.join(d, 'no_such_map'))
+            self.assertNotEqual(code, 0, log)
+            self.assertIn('~initial_map:', log)
+            self.assertIn('not starting', log)
         finally:
             shutil.rmtree(d, ignore_errors=True)
 

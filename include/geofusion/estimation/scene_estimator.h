@@ -275,7 +275,6 @@ class SceneEstimator {
     Eigen::Vector3d box_half = Eigen::Vector3d::Zero();
     /// How much the depth supported it over all its measurements: the sum of their f_gc.
     double depthEvidence() const;
-    double meanConsistency() const;  ///< depthEvidence() a measurement
   };
 
   /// The keyframe's detections with the models of their classes and their scores.
