@@ -182,7 +182,9 @@ const std::pair<RelocalisationDecision, const char*> kDecisionNames[] = {
 };
 }  // namespace
 
-const char* toString(RelocalisationDecision decision) { return nameIn(kDecisionNames, decision); }
+const char* toString(RelocalisationDecision decision) {
+  return nameIn(kDecisionNames, decision);
+}
 
 bool parseRelocalisationDecision(const std::string& name, RelocalisationDecision* decision) {
   return parseIn(kDecisionNames, name, decision);
@@ -202,9 +204,10 @@ OdometryDrift accumulatedDrift(const std::vector<Eigen::Isometry3d>& path,
     ++out.keyframes;
   }
   const double n = out.keyframes;
-  const double systematic_rad = config.drift_rad_per_m * out.path_m + config.drift_rad_per_rad * turned;
-  out.sigma_rad = std::sqrt(n * sigma_rotation_rad * sigma_rotation_rad +
-                            systematic_rad * systematic_rad);
+  const double systematic_rad =
+      config.drift_rad_per_m * out.path_m + config.drift_rad_per_rad * turned;
+  out.sigma_rad =
+      std::sqrt(n * sigma_rotation_rad * sigma_rotation_rad + systematic_rad * systematic_rad);
   const double systematic_m = config.drift_fraction * out.path_m;
   out.sigma_m = std::sqrt(n * sigma_position_m * sigma_position_m + systematic_m * systematic_m +
                           out.sigma_rad * out.sigma_rad * lever * lever);

@@ -88,7 +88,8 @@ Relocalisation readRelocalisation(const YAML::Node& n) {
   r.inliers_after = n["support"].as<int>();
   r.runner_up = n["runner_up"].as<int>();
   r.mahalanobis_sq = n["mahalanobis_sq"].as<double>();
-  const double sigma_m = n["drift_sigma_m"].as<double>(), sigma_rad = n["drift_sigma_rad"].as<double>();
+  const double sigma_m = n["drift_sigma_m"].as<double>(),
+               sigma_rad = n["drift_sigma_rad"].as<double>();
   if (sigma_m >= 0) r.drift.sigma_m = sigma_m, r.drift.sigma_rad = sigma_rad;
   r.drift.path_m = n["path_m"].as<double>(0.0);
   r.T_correction = yaml_io::parsePose(n["correction"], "correction");
@@ -207,8 +208,8 @@ void readStages(const YAML::Node& n, KeyframeResult* k) {
 
 std::vector<std::pair<std::string, std::size_t>> removalsByReason(const RunResults& results) {
   std::vector<std::pair<std::string, std::size_t>> out;
-  for (RemovalReason reason : {RemovalReason::kCandidateTimeout, RemovalReason::kSeenAbsent,
-                               RemovalReason::kMerged}) {
+  for (RemovalReason reason :
+       {RemovalReason::kCandidateTimeout, RemovalReason::kSeenAbsent, RemovalReason::kMerged}) {
     std::size_t n = 0;
     for (const KeyframeResult& k : results.keyframes)
       for (const Removal& r : k.removals) n += r.reason == reason;

@@ -92,13 +92,17 @@ DepthRefinementConfig refinementOf(const EstimatorConfig& config, const MethodSt
 }
 }  // namespace
 
-const char* toString(DetectionDecision decision) { return nameIn(kDecisionNames, decision); }
+const char* toString(DetectionDecision decision) {
+  return nameIn(kDecisionNames, decision);
+}
 
 bool parseDetectionDecision(const std::string& name, DetectionDecision* decision) {
   return parseIn(kDecisionNames, name, decision);
 }
 
-const char* toString(RemovalReason reason) { return nameIn(kRemovalNames, reason); }
+const char* toString(RemovalReason reason) {
+  return nameIn(kRemovalNames, reason);
+}
 
 bool parseRemovalReason(const std::string& name, RemovalReason* reason) {
   return parseIn(kRemovalNames, name, reason);
@@ -325,8 +329,8 @@ Relocalisation SceneEstimator::relocaliseCamera(const ScoredDetections& detectio
     if (relocalisation_anchor_ >= 0) relocalisation_anchor_ = static_cast<int>(t);
     return Relocalisation();
   }
-  const Relocalisation r = relocalise(seen, mapped, config_.gravity, config_.relocalisation,
-                                      driftSinceAnchor(seen));
+  const Relocalisation r =
+      relocalise(seen, mapped, config_.gravity, config_.relocalisation, driftSinceAnchor(seen));
   if (r.agreed) relocalisation_anchor_ = static_cast<int>(t);
   if (!r.applied) return r;
   relocalisation_anchor_ = static_cast<int>(t);
@@ -348,10 +352,10 @@ OdometryDrift SceneEstimator::driftSinceAnchor(const std::vector<LabelledPoint>&
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   for (const LabelledPoint& d : seen) centre += d.position;
   centre /= static_cast<double>(seen.size());
-  const std::size_t anchor = std::min(static_cast<std::size_t>(relocalisation_anchor_),
-                                      T_odom_cam_.size() - 1);
-  const std::vector<Eigen::Isometry3d> path(T_odom_cam_.begin() + static_cast<std::ptrdiff_t>(anchor),
-                                            T_odom_cam_.end());
+  const std::size_t anchor =
+      std::min(static_cast<std::size_t>(relocalisation_anchor_), T_odom_cam_.size() - 1);
+  const std::vector<Eigen::Isometry3d> path(
+      T_odom_cam_.begin() + static_cast<std::ptrdiff_t>(anchor), T_odom_cam_.end());
   // The path in the odometry frame, the centre brought there through the current camera.
   const Eigen::Vector3d centre_odom = T_odom_cam_.back() * (T_map_cam_.back().inverse() * centre);
   return accumulatedDrift(path, centre_odom, config_.relocalisation,
@@ -628,9 +632,8 @@ bool SceneEstimator::mappedTwice(const Track& A, const Track& B) const {
 // The observations of D (same class) taken into K, one measurement per keyframe: K's own wins.
 void SceneEstimator::absorb(const Track& D, Track* K) {
   for (const Observation& o : D.observations) {
-    const bool clash =
-        std::any_of(K->observations.begin(), K->observations.end(),
-                    [&](const Observation& x) { return x.keyframe == o.keyframe; });
+    const bool clash = std::any_of(K->observations.begin(), K->observations.end(),
+                                   [&](const Observation& x) { return x.keyframe == o.keyframe; });
     if (!clash) K->observations.push_back(o);
   }
   std::sort(K->observations.begin(), K->observations.end(),

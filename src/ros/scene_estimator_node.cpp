@@ -273,9 +273,9 @@ void SceneEstimatorNode::reportRelocalisation(const KeyframeResult& result) {
   if (r.tried && !r.applied) {
     ++relocalisations_refused_[toString(r.decision)];
     ROS_DEBUG_STREAM("geofusion: keyframe " << result.keyframe << " relocalisation refused ("
-                                             << toString(r.decision) << "): support "
-                                             << r.inliers_after << ", runner-up " << r.runner_up
-                                             << ", Mahalanobis^2 " << r.mahalanobis_sq);
+                                            << toString(r.decision) << "): support "
+                                            << r.inliers_after << ", runner-up " << r.runner_up
+                                            << ", Mahalanobis^2 " << r.mahalanobis_sq);
   }
   if (!r.applied) return;
   ++relocalisations_;

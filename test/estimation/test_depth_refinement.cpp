@@ -201,8 +201,8 @@ TEST_F(DepthRefinementTest, ADetectionBehindTheSurfaceIsRefinedAndAccepted) {
       const Eigen::Isometry3d behind = offRay(truth, along, Eigen::Vector3d::UnitX(), 0.0);
       const DepthRefinement r = refine(i, behind);
       ASSERT_EQ(r.outcome, RefinementOutcome::kAccepted)
-          << toString(r.outcome) << ": before r_in " << r.before.r_in << " r_occ "
-          << r.before.r_occ << ", corrected by " << r.correction_translation_m << " m";
+          << toString(r.outcome) << ": before r_in " << r.before.r_in << " r_occ " << r.before.r_occ
+          << ", corrected by " << r.correction_translation_m << " m";
       EXPECT_LT((r.T_cam_obj.translation() - truth.translation()).norm(), 0.005);
       EXPECT_GT(r.after.score, r.before.score);
       if (r.before.r_occ > 0.75) ++hidden_starts;

@@ -47,7 +47,8 @@ class MapStoreTest : public ::testing::Test {
       o.best_consistency = 0.8;
       r.final_map.objects.push_back(o);
     }
-    r.T_map_odom.linear() = Eigen::AngleAxisd(0.05 * n, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    r.T_map_odom.linear() =
+        Eigen::AngleAxisd(0.05 * n, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     r.T_map_odom.translation() = Eigen::Vector3d(0.01 * n, 0.0, 0.0);
     return r;
   }

@@ -131,7 +131,8 @@ TEST(Relocalisation, ARevisitMeasuresTheMappedObjects) {
     for (; t < 12; ++t) r = estimator.addKeyframe(scene.keyframe(t, {0, 1, 2, 3, 4, 5}));
     for (int k = 1; k <= drive; ++k, ++t) {
       const double s = static_cast<double>(k) / drive;  // out and back along -y
-      const Eigen::Isometry3d away = headingShift(0.0, Eigen::Vector3d(0, -4.0 * std::min(s, 1 - s), 0));
+      const Eigen::Isometry3d away =
+          headingShift(0.0, Eigen::Vector3d(0, -4.0 * std::min(s, 1 - s), 0));
       const Eigen::Isometry3d drifted =
           headingShift(5.0 * s, s * drift.translation()) * away * scene.T_world_cam();
       r = estimator.addKeyframe(driveKeyframe(t, drifted, scene.K()));
@@ -210,7 +211,8 @@ TEST(Relocalisation, AnAmbiguousLayoutIsRefused) {
   const char* classes[] = {"mug", "can", "box", "bowl"};
   const double xy[][2] = {{0.0, 0.0}, {0.12, 0.05}, {0.05, 0.16}, {-0.08, 0.1}};
   std::vector<LabelledPoint> group, map;
-  for (int i = 0; i < 4; ++i) group.push_back({classes[i], Eigen::Vector3d(xy[i][0], xy[i][1], 0.8)});
+  for (int i = 0; i < 4; ++i)
+    group.push_back({classes[i], Eigen::Vector3d(xy[i][0], xy[i][1], 0.8)});
   for (const LabelledPoint& p : group) map.push_back(p);
   for (const LabelledPoint& p : group)
     map.push_back({p.class_name, p.position + Eigen::Vector3d(0.3, 0.0, 0.0)});
@@ -261,19 +263,22 @@ TEST(Relocalisation, DriftGrowsWithThePathAndTheLeverArm) {
     map.push_back({classes[i], Eigen::Vector3d(xy[i][0], xy[i][1], 1.0)});
     detections.push_back({classes[i], correction.inverse() * map.back().position});
   }
-  const Relocalisation refused = relocalise(detections, map, -Eigen::Vector3d::UnitZ(), config, still);
+  const Relocalisation refused =
+      relocalise(detections, map, -Eigen::Vector3d::UnitZ(), config, still);
   EXPECT_EQ(refused.decision, RelocalisationDecision::kBeyondDrift);
   EXPECT_FALSE(refused.applied);
   EXPECT_EQ(refused.inliers_after, 5);  // the correction it refused would explain them all
-  const Relocalisation allowed = relocalise(detections, map, -Eigen::Vector3d::UnitZ(), config, moved);
+  const Relocalisation allowed =
+      relocalise(detections, map, -Eigen::Vector3d::UnitZ(), config, moved);
   EXPECT_TRUE(allowed.applied) << toString(allowed.decision);
 }
 
 // Issue 32's first case: a near-symmetric table of five objects (two cans, a mug, two flat boxes
 // the detector confuses at times), the camera moving about half a metre around it and never
 // leaving; detections from a colour-only estimator, harsher than the issue's: 70 % 2-4 cm off
-// along the ray, 30 % coarse failures 10-27 cm off, the flat boxes swapped 20 % of the time. The odometry is good (a few millimetres). No
-// relocalisation is applied and the camera stays within the odometry's error.
+// along the ray, 30 % coarse failures 10-27 cm off, the flat boxes swapped 20 % of the time. The
+// odometry is good (a few millimetres). No relocalisation is applied and the camera stays within
+// the odometry's error.
 TEST(Relocalisation, ACameraThatNeverLeavesIsNotRelocalised) {
   const ModelSet models = ModelSet::builtinPrimitives();
   test::TableScene scene(models);
@@ -299,27 +304,32 @@ TEST(Relocalisation, ACameraThatNeverLeavesIsNotRelocalised) {
       const Eigen::Vector3d eye(0.66 * std::sin(a), -0.66 * std::cos(a), 0.46);
       scene.setCamera(lookAt(eye, Eigen::Vector3d(0.0, 0.0, 0.06)));
       scene.renderObserved(100 + t);
-      odometry_error = headingShift(0.05 * gauss(rng), 0.0015 * Eigen::Vector3d(gauss(rng), gauss(rng), 0)) *
-                       odometry_error;
+      odometry_error =
+          headingShift(0.05 * gauss(rng), 0.0015 * Eigen::Vector3d(gauss(rng), gauss(rng), 0)) *
+          odometry_error;
       Keyframe kf = scene.keyframe(t, {0, 1, 2, 3, 4}, odometry_error);
       for (ObjectMeasurement& m : kf.detections) {
         const Eigen::Vector3d ray = m.T_cam_obj.translation().normalized();
         const double along = uni(rng) < 0.3 ? 0.10 + 0.17 * uni(rng) : 0.02 + 0.02 * uni(rng);
         m.T_cam_obj.translation() += (uni(rng) < 0.5 ? along : -along) * ray;
         const bool swap = uni(rng) < 0.2;
-        if (swap && m.class_name == "008_pudding_box") m.class_name = "009_gelatin_box";
-        else if (swap && m.class_name == "009_gelatin_box") m.class_name = "008_pudding_box";
+        if (swap && m.class_name == "008_pudding_box")
+          m.class_name = "009_gelatin_box";
+        else if (swap && m.class_name == "009_gelatin_box")
+          m.class_name = "008_pudding_box";
       }
       const KeyframeResult r = estimator.addKeyframe(kf);
       out.searched += r.relocalisation.tried;
       out.applied += r.relocalisation.applied;
       const Eigen::Vector3d truth = scene.T_world_cam().translation();
       out.worst_camera = std::max(out.worst_camera, (r.T_map_cam.translation() - truth).norm());
-      out.worst_odometry = std::max(out.worst_odometry, (kf.T_odom_cam.translation() - truth).norm());
+      out.worst_odometry =
+          std::max(out.worst_odometry, (kf.T_odom_cam.translation() - truth).norm());
     }
-    std::printf("relocalisation searched at %d of 40 keyframes, applied %d; camera error at most "
-                "%.1f mm, odometry's %.1f mm\n",
-                out.searched, out.applied, 1000 * out.worst_camera, 1000 * out.worst_odometry);
+    std::printf(
+        "relocalisation searched at %d of 40 keyframes, applied %d; camera error at most "
+        "%.1f mm, odometry's %.1f mm\n",
+        out.searched, out.applied, 1000 * out.worst_camera, 1000 * out.worst_odometry);
     return out;
   };
   const Run defaults = run(EstimatorConfig());

@@ -196,7 +196,7 @@ struct KeyframeResult {
   std::vector<ObjectEstimate> objects;  ///< the estimate after this keyframe
   /// Objects seen but not (yet) confirmed: not part of the map, shown for inspection only.
   std::vector<ObjectEstimate> tentative;
-  std::vector<int> removed_ids;  ///< objects removed or merged away at this keyframe
+  std::vector<int> removed_ids;   ///< objects removed or merged away at this keyframe
   std::vector<Removal> removals;  ///< ... each with its reason, in the same order
   /// Contacts among `objects` (indices into it; -1 = the support plane).
   std::vector<FeatureContact> contacts;
