@@ -467,6 +467,16 @@ bool inView(const SceneObject& o, const GroundTruthFrame& f, const PinholeIntrin
   return u >= 0 && v >= 0 && u < K.width && v < K.height;
 }
 
+// Whether the camera of frame f sees where object i (taken away) stood: at least
+// well_seen_min_visible of its old place unhidden (issue 32); files before that: its centre in
+// the image.
+bool placeSeen(const SceneObject& o, std::size_t i, const GroundTruthFrame& f,
+               const PinholeIntrinsics& K, const EvaluationConfig& config) {
+  if (f.place_visible_fraction.size() > i && f.place_visible_fraction[i] >= 0.0)
+    return f.place_visible_fraction[i] >= config.well_seen_min_visible;
+  return inView(o, f, K);
+}
+
 // Object lifecycle: for every true object, when it enters the online map, how often it leaves and
 // comes back, and whether a well-seen object is lost. Not for FbF (no map that persists).
 void evaluateLifecycle(const GroundTruth& gt, const RunResults& results,
@@ -491,7 +501,7 @@ void evaluateLifecycle(const GroundTruth& gt, const RunResults& results,
       if (f->visible_fraction[i] >= config.well_seen_min_visible) ++l.well_seen_keyframes;
       const SceneObject& o = gt.scene.objects[i];
       if (l.removed_keyframe < 0 && !o.presentAtTheEnd() && f->index >= o.present_until_frame &&
-          inView(o, *f, gt.intrinsics))
+          placeSeen(o, i, *f, gt.intrinsics, config))
         l.removed_keyframe = t;
       if (mapped[i]) {
         l.last_mapped = t;

@@ -25,7 +25,7 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
     : nh_(nh), pnh_(pnh), tf_listener_(tf_buffer_), diagnostics_(nh, pnh) {
   pnh_.param<std::string>("map_frame", map_frame_, kMapFrame);
   pnh_.param<std::string>("odom_frame", odom_frame_, kOdomFrame);
-  config_ = loadNodeConfig(pnh_, {"odometry", "odom_topic"});
+  config_ = loadNodeConfig(pnh_, {"odometry", "odom_topic", "initial_map"});
   // Where odometry comes from is the launch file's choice (odometry:=tf|topic|visual).
   pnh_.param<std::string>("odom_topic", odom_topic_, "");
   std::string odometry = odom_topic_.empty() ? "tf" : "topic";  // a plain node: ~odom_topic says

@@ -368,6 +368,13 @@ bool writeGroundTruth(const std::string& path, const GroundTruth& gt, std::strin
       }
       out << YAML::EndSeq;
       out << YAML::Key << "visible_pixels" << YAML::Value << YAML::Flow << f.visible_pixels;
+      if (std::any_of(f.place_visible_fraction.begin(), f.place_visible_fraction.end(),
+                      [](double v) { return v >= 0.0; })) {
+        out << YAML::Key << "place_visible_fraction" << YAML::Value << YAML::Flow
+            << YAML::BeginSeq;
+        for (double v : f.place_visible_fraction) out << std::round(v * 1000.0) / 1000.0;
+        out << YAML::EndSeq;
+      }
       out << YAML::Key << "visible_boxes" << YAML::Value << YAML::Flow << YAML::BeginSeq;
       for (const PixelBox& b : f.visible_boxes) {
         out << YAML::Flow << YAML::BeginSeq << b.x << b.y << b.width << b.height << YAML::EndSeq;
@@ -469,6 +476,8 @@ bool readGroundTruth(const std::string& path, const ModelSet& models, GroundTrut
       if (fr.keyframe) {
         fr.visible_fraction = f["visible_fraction"].as<std::vector<double>>();
         fr.visible_pixels = f["visible_pixels"].as<std::vector<int>>();
+        if (f["place_visible_fraction"])
+          fr.place_visible_fraction = f["place_visible_fraction"].as<std::vector<double>>();
         fr.detection_truth = f["detection_truth"].as<std::vector<int>>();
         for (const YAML::Node& b : f["visible_boxes"]) {
           fr.visible_boxes.push_back(
@@ -477,7 +486,9 @@ bool readGroundTruth(const std::string& path, const ModelSet& models, GroundTrut
         if (f["swapped"]) fr.swapped = f["swapped"].as<std::vector<int>>();
         if (static_cast<int>(fr.visible_fraction.size()) != n ||
             static_cast<int>(fr.visible_pixels.size()) != n ||
-            (!fr.visible_boxes.empty() && static_cast<int>(fr.visible_boxes.size()) != n)) {
+            (!fr.visible_boxes.empty() && static_cast<int>(fr.visible_boxes.size()) != n) ||
+            (!fr.place_visible_fraction.empty() &&
+             static_cast<int>(fr.place_visible_fraction.size()) != n)) {
           throw std::runtime_error("frame " + std::to_string(fr.index) +
                                    ": visibility lists do not have one entry an object");
         }

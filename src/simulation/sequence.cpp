@@ -368,7 +368,7 @@ SequenceFrame SequenceRenderer::render(const FramePose& pose, const DepthNoise& 
       OffscreenRenderer::kDepth | OffscreenRenderer::kInstance | OffscreenRenderer::kColor);
   f.clean_depth = f.images.depth;
   applyDepthNoise(K_, depth_noise, rng, &f.images.depth);
-  const std::vector<PixelBox> boxes = measureVisibility(items, &f);
+  const std::vector<PixelBox> boxes = measureVisibility(items, T_cam_map, frame, &f);
   stepPersistentErrors(detector, models, rng);
   Draws draws{rng};
   detectObjects(T_cam_map, boxes, detector, models, &draws, &f);
@@ -419,13 +419,17 @@ std::vector<RenderItem> SequenceRenderer::sceneItems(const Eigen::Isometry3d& T_
 }
 
 // Visibility of each object: its pixels in the scene against its pixels alone (rendered again in
-// its region). Returns each object's box of visible pixels.
+// its region); for an object taken away, how much of its old place the camera sees (its pixels
+// alone at its old pose that nothing in the scene hides). Returns each object's box of visible
+// pixels.
 std::vector<PixelBox> SequenceRenderer::measureVisibility(const std::vector<RenderItem>& items,
-                                                          SequenceFrame* frame) {
+                                                          const Eigen::Isometry3d& T_cam_map,
+                                                          int frame_index, SequenceFrame* frame) {
   SequenceFrame& f = *frame;
   const std::size_t n = scene_.objects.size();
   f.visible_pixels.assign(n, 0);
   f.visible_fraction.assign(n, 0.0);
+  f.place_visible_fraction.assign(n, -1.0);
   std::vector<PixelBox> boxes(n);
   std::vector<int> x0(n, K_.width), y0(n, K_.height), x1(n, -1), y1(n, -1);
   for (int v = 0; v < K_.height; ++v) {
@@ -438,15 +442,42 @@ std::vector<PixelBox> SequenceRenderer::measureVisibility(const std::vector<Rend
       x1[i] = std::max(x1[i], u), y1[i] = std::max(y1[i], v);
     }
   }
+  // The render item of each object by its instance id (objects not there have none).
+  std::vector<const RenderItem*> item_of(n, nullptr);
+  for (const RenderItem& it : items)
+    if (it.instance_id >= 1 && it.instance_id <= n) item_of[it.instance_id - 1u] = &it;
   RenderedImages alone;
   for (std::size_t i = 0; i < n; ++i) {
-    if (f.visible_pixels[i] == 0) continue;
+    const SceneObject& o = scene_.objects[i];
+    const bool taken_away = !o.presentAt(frame_index) && frame_index >= o.present_until_frame &&
+                            !o.presentAtTheEnd();
+    if (f.visible_pixels[i] == 0 && !taken_away) continue;
+    RenderItem it;
+    if (item_of[i]) {
+      it = *item_of[i];
+    } else {
+      it.mesh = object_meshes_[i];
+      it.T_cam_model = T_cam_map * o.T_world_obj;
+    }
+    const PixelBox region = renderer_.projectedRegion(K_, it.mesh, it.T_cam_model);
+    if (region.width <= 0 || region.height <= 0) continue;
+    renderer_.render(K_, {it}, &alone, region, OffscreenRenderer::kDepth);
+    int own = 0, unhidden = 0;
+    for (int y = 0; y < region.height; ++y) {
+      for (int x = 0; x < region.width; ++x) {
+        const float z = alone.depth[static_cast<std::size_t>(y) * region.width + x];
+        if (!(z > 0.f)) continue;
+        ++own;
+        const float scene_z = f.clean_depth[static_cast<std::size_t>(region.y + y) * K_.width +
+                                            region.x + x];
+        unhidden += !(scene_z > 0.f) || scene_z > z - 0.005f;
+      }
+    }
+    if (taken_away) {
+      f.place_visible_fraction[i] = own > 0 ? static_cast<double>(unhidden) / own : 0.0;
+      continue;
+    }
     boxes[i] = PixelBox{x0[i], y0[i], x1[i] - x0[i] + 1, y1[i] - y0[i] + 1};
-    const PixelBox region =
-        renderer_.projectedRegion(K_, object_meshes_[i], items[i + 2].T_cam_model);
-    renderer_.render(K_, {items[i + 2]}, &alone, region, OffscreenRenderer::kDepth);
-    int own = 0;
-    for (float z : alone.depth) own += z > 0.f;
     f.visible_fraction[i] =
         own > 0 ? std::min(1.0, static_cast<double>(f.visible_pixels[i]) / own) : 0.0;
   }

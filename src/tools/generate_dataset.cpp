@@ -306,6 +306,7 @@ int main(int argc, char** argv) {
         g.visible_fraction = f.visible_fraction;
         g.visible_pixels = f.visible_pixels;
         g.visible_boxes = f.visible_boxes;
+        g.place_visible_fraction = f.place_visible_fraction;
         g.detection_truth = f.detection_truth;
         g.swapped = f.swapped;
         detections += static_cast<int>(f.detections.size());

@@ -207,6 +207,17 @@ TEST_F(RunEvaluationTest, AnObjectTakenAwayIsScoredByHowLongTheMapKeptIt) {
   EXPECT_EQ(ev.correct_contacts, 1);
   // No ground-truth box for the brick after it left.
   for (const GroundTruthBox& g : ev.ground_truth) EXPECT_FALSE(g.object == 1 && g.image == 2);
+  // Its old place hidden at keyframe 1 (the ground truth says how much of it the camera sees):
+  // the latency counts from keyframe 2, where it is seen empty and the map has let go.
+  for (GroundTruthFrame& f : gt.frames) {
+    if (!f.keyframe) continue;
+    f.place_visible_fraction.assign(gt.scene.objects.size(), -1.0);
+    if (f.index >= 6) f.place_visible_fraction[1] = f.index < 11 ? 0.2 : 0.9;
+  }
+  const RunEvaluation hidden = evaluate();
+  EXPECT_EQ(hidden.lifecycle[1].removed_keyframe, 2);
+  EXPECT_EQ(hidden.lifecycle[1].removal_latency, 0);
+  for (GroundTruthFrame& f : gt.frames) f.place_visible_fraction.clear();
   // Gone at once: latency 0.
   results.keyframes[1].objects.pop_back();
   EXPECT_EQ(evaluate().lifecycle[1].removal_latency, 0);

@@ -150,11 +150,13 @@ class ConfigTest(unittest.TestCase):
                 node.terminate()
                 log = node.communicate(timeout=30)[0]
                 sub.unregister()
+            # Message ids are the map's plus one (0 is the table, MapObject.msg).
             got = sorted((o.id, o.class_name) for o in maps[0].objects)
-            self.assertEqual(got, sorted((o['id'], o['class_name']) for o in saved), log)
+            self.assertEqual(got, sorted((o['id'] + 1, o['class_name']) for o in saved), log)
+            self.assertNotIn('initial_map is not read by anything', log)
             by_id = {o.id: o for o in maps[0].objects}
             for o in saved:
-                p = by_id[o['id']].pose.pose.position
+                p = by_id[o['id'] + 1].pose.pose.position
                 self.assertAlmostEqual(p.x, o['map_object'][0], places=6)
                 self.assertAlmostEqual(p.y, o['map_object'][1], places=6)
                 self.assertAlmostEqual(p.z, o['map_object'][2], places=6)

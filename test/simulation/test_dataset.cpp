@@ -212,6 +212,19 @@ TEST_F(GroundTruthTest, SceneChangesTakeObjectsAwayAndMoveThem) {
   EXPECT_EQ(after.visible_pixels[static_cast<std::size_t>(moved)], 0);
   EXPECT_EQ(before.visible_pixels[static_cast<std::size_t>(n)], 0);
   for (int t : after.detection_truth) EXPECT_NE(t, moved);
+  // How much of an emptied place the camera sees (issue 32: the removal latency counts from
+  // there): measured for the objects taken away once they are, -1 for all others; at least as
+  // much as the object itself showed before (it no longer hides its own place).
+  for (int i = 0; i < n; ++i) {
+    const std::size_t k = static_cast<std::size_t>(i);
+    EXPECT_EQ(before.place_visible_fraction[k], -1.0);
+    if (gt_.scene.objects[k].presentAtTheEnd()) {
+      EXPECT_EQ(after.place_visible_fraction[k], -1.0);
+      continue;
+    }
+    EXPECT_GE(after.place_visible_fraction[k], before.visible_fraction[k] - 0.02) << "object " << i;
+    EXPECT_LE(after.place_visible_fraction[k], 1.0);
+  }
   // The ground truth file keeps the times (the fixture's frames saw the scene before the change).
   gt_.frames.clear();
   const std::string path = tempPath("changed_gt.yaml");

@@ -76,8 +76,9 @@ struct ObjectLifecycle {
   int longest_absence = 0;      ///< longest stretch out of the map after first_mapped, keyframes
   bool in_final_map = false;    ///< matched in the final map
   bool lost = false;            ///< well seen, yet absent at the end or for too long
-  /// A changed scene: the first keyframe without the object whose camera looks at where it was
-  /// (its centre in the image; results order), -1 while it stays or when it was never mapped.
+  /// A changed scene: the first keyframe without the object whose camera sees where it was (at
+  /// least well_seen_min_visible of its old place unhidden; ground truth before issue 32: its
+  /// centre in the image; results order), -1 while it stays or when it was never mapped.
   int removed_keyframe = -1;
   int last_mapped = -1;  ///< last keyframe it is in the map
   /// Keyframes from removed_keyframe until it left the map for good (0: gone at once); -1 when

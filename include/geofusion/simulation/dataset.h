@@ -80,6 +80,9 @@ struct GroundTruthFrame {
   std::vector<double> visible_fraction;                             ///< keyframes, per object
   std::vector<int> visible_pixels;                                  ///< keyframes, per object
   std::vector<PixelBox> visible_boxes;  ///< keyframes, per object: box of its visible pixels
+  /// Keyframes, per object taken away: the share of its old place the camera sees (nothing
+  /// hides it); -1 for the others; empty in files before issue 32 (changed scenes only).
+  std::vector<double> place_visible_fraction;
   /// Keyframes, per detection: object index; -1 a one-off false positive, -2 - k phantom k.
   std::vector<int> detection_truth;
   std::vector<int> swapped;  ///< keyframes: objects reported as a look-alike class

@@ -139,6 +139,9 @@ struct SequenceFrame {
   std::vector<double> visible_fraction;  ///< per object: visible / unoccluded pixels
   std::vector<int> visible_pixels;
   std::vector<PixelBox> visible_boxes;  ///< per object: box of its visible pixels (empty: none)
+  /// Per object taken away (a changed scene), the share of its old place the camera sees (its
+  /// silhouette at its old pose that nothing hides); -1 for the others.
+  std::vector<double> place_visible_fraction;
   std::vector<RawDetection> detections;
   /// Per detection: object index; -1 a one-off false positive; -2 - k the persistent phantom k.
   std::vector<int> detection_truth;
@@ -184,6 +187,7 @@ class SequenceRenderer {
   /// The objects there at camera frame `frame` (SceneObject::presentAt).
   std::vector<RenderItem> sceneItems(const Eigen::Isometry3d& T_cam_map, int frame) const;
   std::vector<PixelBox> measureVisibility(const std::vector<RenderItem>& items,
+                                          const Eigen::Isometry3d& T_cam_map, int frame_index,
                                           SequenceFrame* frame);
   void stepPersistentErrors(const DetectorModel& detector, const ModelSet& models,
                             std::mt19937& rng);
