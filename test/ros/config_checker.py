@@ -127,9 +127,7 @@ class ConfigTest(unittest.TestCase):
         and poses) before any input; a map that cannot be loaded stops the start with why."""
         d = tempfile.mkdtemp(prefix='geofusion_initial_map_')
         try:
-            subprocess.check_call([util.find_tool('generate_dataset'), '--suite', 'demo',
-                                   '--out-dir', d, '--keyframes', '12', '--previews', '0'],
-                                  stdout=subprocess.DEVNULL)
+            util.generate_demo(d, 12)
             prefix = os.path.join(d, 'saved')
             subprocess.check_call([util.find_tool('run_offline'), '--bag',
                                    os.path.join(d, 'demo_01.bag'), '--out',
