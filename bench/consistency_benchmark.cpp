@@ -32,13 +32,14 @@
 using namespace geofusion;
 
 int main(int argc, char** argv) {
-  std::string models_dir = defaultYcbDir();
+  std::string models_dir;
+  bool models_given = false;
   int rounds = 40, stride = 1;
   bool full_frame = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--models" && i + 1 < argc)
-      models_dir = argv[++i];
+      models_dir = argv[++i], models_given = true;
     else if (a == "--rounds" && i + 1 < argc)
       rounds = std::max(1, std::atoi(argv[++i]));
     else if (a == "--stride" && i + 1 < argc)
@@ -52,11 +53,19 @@ int main(int argc, char** argv) {
     }
   }
 
+  if (!models_given) models_dir = defaultYcbDir("consistency_benchmark");
   ModelSet models;
   std::vector<std::string> errors;
-  const std::string yaml = packageDir() + "/config/models/ycb_video.yaml";
+  const std::string yaml =
+      requirePackageDir("consistency_benchmark") + "/config/models/ycb_video.yaml";
   if (!std::ifstream(models_dir + "/classes.txt").good() ||
       !ModelSet::load(yaml, models_dir, &models, &errors) || models.size() == 0) {
+    if (models_given) {  // never other data than the user named
+      std::fprintf(stderr, "consistency_benchmark: cannot load the YCB-Video models of %s\n",
+                   models_dir.c_str());
+      for (const auto& e : errors) std::fprintf(stderr, "  %s\n", e.c_str());
+      return 1;
+    }
     std::printf("YCB-Video models not found at %s: using the built-in primitives\n",
                 models_dir.c_str());
     models = ModelSet::builtinPrimitives();

@@ -28,7 +28,7 @@
 
 int main(int argc, char** argv) {
   using namespace geofusion;
-  std::string models_dir = defaultYcbDir();
+  std::string models_dir = defaultYcbDir("estimator_benchmark");
   int objects = 18, keyframes = 100;
   unsigned seed = 101;
   std::string detector = "densefusion", only;
@@ -71,7 +71,7 @@ int main(int argc, char** argv) {
   }
   ModelSet models;
   std::vector<std::string> errors;
-  const bool ycb = ModelSet::load(packageDir() + "/config/models/ycb_video.yaml", models_dir,
+  const bool ycb = ModelSet::load(requirePackageDir("estimator_benchmark") + "/config/models/ycb_video.yaml", models_dir,
                                   &models, &errors) &&
                    models.size() > 0;
   if (!ycb) {

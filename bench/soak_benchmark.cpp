@@ -40,7 +40,7 @@ namespace {
 using namespace geofusion;
 
 struct Options {
-  std::string out, models_dir = defaultYcbDir();
+  std::string out, models_dir = defaultYcbDir("soak_benchmark");
   ConfigOptions config;  ///< --params, --set
   int keyframes = 2000, tables = 3, visit = 100, objects = 20;
   unsigned seed = 7;
@@ -190,7 +190,7 @@ int main(int argc, char** argv) {
 
   ModelSet models;
   std::vector<std::string> errors;
-  const bool ycb = ModelSet::load(packageDir() + "/config/models/ycb_video.yaml", o.models_dir,
+  const bool ycb = ModelSet::load(requirePackageDir("soak_benchmark") + "/config/models/ycb_video.yaml", o.models_dir,
                                   &models, &errors, config.model_set.surface_features) &&
                    models.size() > 0;
   if (!ycb) {

@@ -3,6 +3,7 @@
 #include <ros/package.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <stdexcept>
 
 namespace geofusion {
@@ -89,6 +90,10 @@ std::vector<std::string> applyReconfigure(const dynamic_reconfigure::Config& mes
 }
 
 std::string packageDir() {
+  // Without a sourced workspace rospack only prints errors: say nothing here, the caller says
+  // what to do (requirePackageDir).
+  const char* path = std::getenv("ROS_PACKAGE_PATH");
+  if (!path || !*path) return "";
   return ros::package::getPath("geofusion");
 }
 

@@ -31,7 +31,7 @@ struct Options {
   std::string suite;
   std::string out_dir;
   std::string models_dir;
-  std::string model_set_yaml = geofusion::packageDir() + "/config/models/ycb_video.yaml";
+  std::string model_set_yaml;  ///< default: the package's config/models/ycb_video.yaml
   std::vector<std::string> scenes;
   int keyframes = -1;
   int image_every = -1;
@@ -101,7 +101,10 @@ Options parse(int argc, char** argv) {
         data ? std::string(data) : std::string(home ? home : "/tmp") + "/.cache/geofusion/data";
     o.out_dir = root + "/" + o.suite;
   }
-  if (o.models_dir.empty()) o.models_dir = geofusion::defaultYcbDir();
+  if (o.models_dir.empty()) o.models_dir = geofusion::defaultYcbDir("generate_dataset");
+  if (o.model_set_yaml.empty())
+    o.model_set_yaml =
+        geofusion::requirePackageDir("generate_dataset") + "/config/models/ycb_video.yaml";
   return o;
 }
 

@@ -17,12 +17,27 @@
 
 namespace geofusion {
 
+/// The package's folder, for a tool that reads the package's files (the model-set table): found
+/// through ROS; without a sourced workspace the tool stops here, saying so, rather than reading
+/// a path built from nothing and going on with other data than the user named.
+inline std::string requirePackageDir(const std::string& tool) {
+  const std::string dir = packageDir();
+  if (dir.empty()) {
+    std::cerr << tool
+              << ": the geofusion package is not found (ROS_PACKAGE_PATH): source the "
+                 "workspace's setup.bash first (e.g. source ~/.cache/geofusion/ws-*/devel/"
+                 "setup.bash)\n";
+    std::exit(1);
+  }
+  return dir;
+}
+
 /// The default YCB-Video models folder.
-inline std::string defaultYcbDir() {
+inline std::string defaultYcbDir(const std::string& tool = "geofusion") {
   const char* env = std::getenv("GEOFUSION_YCB_DIR");
   if (env) return env;
   char real[PATH_MAX];
-  const std::string package = packageDir();
+  const std::string package = requirePackageDir(tool);
   return std::string(realpath(package.c_str(), real) ? real : package.c_str()) +
          "/../shared/data/ycb_video";
 }
@@ -32,9 +47,10 @@ inline std::string defaultYcbDir() {
 /// beside the source tree when neither --models nor $GEOFUSION_YCB_DIR says where.
 inline bool loadModelSetOption(const std::string& tool, const std::string& spec, std::string dir,
                                ModelSet* models, const SurfaceFeatureConfig& features = {}) {
-  if (spec == "ycb_video" && dir.empty()) dir = defaultYcbDir();
+  if (spec == "ycb_video" && dir.empty()) dir = defaultYcbDir(tool);
   std::vector<std::string> errors;
-  if (!loadModelSet(spec, dir, packageDir(), models, &errors, features)) {
+  const std::string package = spec == "primitives" ? "" : requirePackageDir(tool);
+  if (!loadModelSet(spec, dir, package, models, &errors, features)) {
     std::cerr << tool << ": cannot load the model set " << spec << "\n";
     for (const auto& e : errors) std::cerr << "  " << e << "\n";
     return false;

@@ -167,6 +167,11 @@ class EstimatorReplayTest(unittest.TestCase):
         values = {kv.key: kv.value for kv in last.values}
         self.assertGreaterEqual(int(values['keyframes']), KEYFRAMES - 1)
         self.assertIn('last keyframe ms: stage II', values)
+        # Every removal and every refused relocalisation counted by its reason (issue 32).
+        for reason in ('candidate_timeout', 'seen_absent', 'merged'):
+            self.assertGreaterEqual(int(values['objects removed: ' + reason]), 0)
+        for decision in ('no_gain', 'beyond_drift', 'ambiguous'):
+            self.assertGreaterEqual(int(values['relocalisations refused: ' + decision]), 0)
         self.assertIn('input rate ' + util.DETECTIONS_TOPIC, values)
         self.assertTrue(values['input rate ' + util.DETECTIONS_TOPIC].endswith(' Hz'))
         self.assertGreaterEqual(int(values['frames dropped: unsynchronised']), 0)

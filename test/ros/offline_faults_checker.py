@@ -83,6 +83,19 @@ class OfflineFaultsTest(unittest.TestCase):
         self.assertEqual(res['frames_dropped'].get('unusable depth', 0), broken, text)
         self.assertEqual(res['frames_skipped'], sum(res['frames_dropped'].values()))
 
+    def test_tools_without_the_workspace_say_to_source_it(self):
+        """Started without the workspace's environment, a tool that reads the package's files
+        stops saying what to do; it never goes on with other data than the user named."""
+        env = {'PATH': '/usr/bin:/bin', 'HOME': os.environ.get('HOME', '/tmp')}
+        for tool, args in (('consistency_benchmark', ['--models', self.dir, '--rounds', '1']),
+                           ('generate_dataset', ['--suite', 'demo', '--out-dir',
+                                                 os.path.join(self.dir, 'unsourced')])):
+            p = subprocess.run([util.find_tool(tool)] + args, env=env, stdout=subprocess.PIPE,
+                               stderr=subprocess.STDOUT, universal_newlines=True, timeout=120)
+            self.assertEqual(p.returncode, 1, p.stdout)
+            self.assertIn("source the workspace's setup.bash first", p.stdout)
+            self.assertNotIn('built-in primitives', p.stdout)
+
     def test_late_detections_are_counted_out_of_order(self):
         bag = self.faulty('late')
         delayed = fault_bags.late_detections(self.good, bag)
