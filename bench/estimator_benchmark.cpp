@@ -71,9 +71,10 @@ int main(int argc, char** argv) {
   }
   ModelSet models;
   std::vector<std::string> errors;
-  const bool ycb = ModelSet::load(requirePackageDir("estimator_benchmark") + "/config/models/ycb_video.yaml", models_dir,
-                                  &models, &errors) &&
-                   models.size() > 0;
+  const bool ycb =
+      ModelSet::load(requirePackageDir("estimator_benchmark") + "/config/models/ycb_video.yaml",
+                     models_dir, &models, &errors) &&
+      models.size() > 0;
   if (!ycb) {
     models = ModelSet::builtinPrimitives();
     std::printf("YCB-Video models not found in %s: using the built-in primitives\n",

@@ -190,9 +190,10 @@ int main(int argc, char** argv) {
 
   ModelSet models;
   std::vector<std::string> errors;
-  const bool ycb = ModelSet::load(requirePackageDir("soak_benchmark") + "/config/models/ycb_video.yaml", o.models_dir,
-                                  &models, &errors, config.model_set.surface_features) &&
-                   models.size() > 0;
+  const bool ycb =
+      ModelSet::load(requirePackageDir("soak_benchmark") + "/config/models/ycb_video.yaml",
+                     o.models_dir, &models, &errors, config.model_set.surface_features) &&
+      models.size() > 0;
   if (!ycb) {
     models = ModelSet::builtinPrimitives();
     std::printf("YCB-Video models not found in %s: using the built-in primitives\n",

@@ -370,8 +370,7 @@ bool writeGroundTruth(const std::string& path, const GroundTruth& gt, std::strin
       out << YAML::Key << "visible_pixels" << YAML::Value << YAML::Flow << f.visible_pixels;
       if (std::any_of(f.place_visible_fraction.begin(), f.place_visible_fraction.end(),
                       [](double v) { return v >= 0.0; })) {
-        out << YAML::Key << "place_visible_fraction" << YAML::Value << YAML::Flow
-            << YAML::BeginSeq;
+        out << YAML::Key << "place_visible_fraction" << YAML::Value << YAML::Flow << YAML::BeginSeq;
         for (double v : f.place_visible_fraction) out << std::round(v * 1000.0) / 1000.0;
         out << YAML::EndSeq;
       }

@@ -449,8 +449,8 @@ std::vector<PixelBox> SequenceRenderer::measureVisibility(const std::vector<Rend
   RenderedImages alone;
   for (std::size_t i = 0; i < n; ++i) {
     const SceneObject& o = scene_.objects[i];
-    const bool taken_away = !o.presentAt(frame_index) && frame_index >= o.present_until_frame &&
-                            !o.presentAtTheEnd();
+    const bool taken_away =
+        !o.presentAt(frame_index) && frame_index >= o.present_until_frame && !o.presentAtTheEnd();
     if (f.visible_pixels[i] == 0 && !taken_away) continue;
     RenderItem it;
     if (item_of[i]) {
@@ -468,8 +468,8 @@ std::vector<PixelBox> SequenceRenderer::measureVisibility(const std::vector<Rend
         const float z = alone.depth[static_cast<std::size_t>(y) * region.width + x];
         if (!(z > 0.f)) continue;
         ++own;
-        const float scene_z = f.clean_depth[static_cast<std::size_t>(region.y + y) * K_.width +
-                                            region.x + x];
+        const float scene_z =
+            f.clean_depth[static_cast<std::size_t>(region.y + y) * K_.width + region.x + x];
         unhidden += !(scene_z > 0.f) || scene_z > z - 0.005f;
       }
     }
