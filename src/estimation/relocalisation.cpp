@@ -170,9 +170,6 @@ Hypothesis refined(const Hypothesis& best, const std::vector<LabelledPoint>& det
   return keeps ? h : best;
 }
 
-}  // namespace
-
-namespace {
 const std::pair<RelocalisationDecision, const char*> kDecisionNames[] = {
     {RelocalisationDecision::kNotSearched, "not_searched"},
     {RelocalisationDecision::kApplied, "applied"},
@@ -180,6 +177,7 @@ const std::pair<RelocalisationDecision, const char*> kDecisionNames[] = {
     {RelocalisationDecision::kBeyondDrift, "beyond_drift"},
     {RelocalisationDecision::kAmbiguous, "ambiguous"},
 };
+
 }  // namespace
 
 const char* toString(RelocalisationDecision decision) {
@@ -188,6 +186,12 @@ const char* toString(RelocalisationDecision decision) {
 
 bool parseRelocalisationDecision(const std::string& name, RelocalisationDecision* decision) {
   return parseIn(kDecisionNames, name, decision);
+}
+
+Eigen::Vector3d centreOf(const std::vector<LabelledPoint>& points) {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (const LabelledPoint& p : points) centre += p.position;
+  return points.empty() ? centre : Eigen::Vector3d(centre / static_cast<double>(points.size()));
 }
 
 OdometryDrift accumulatedDrift(const std::vector<Eigen::Isometry3d>& path,
@@ -229,9 +233,7 @@ Relocalisation relocalise(const std::vector<LabelledPoint>& detections,
   out.tried = true;
   out.decision = RelocalisationDecision::kNoGain;
   const Eigen::Matrix3d R_g = gravityFrame(gravity);
-  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-  for (const LabelledPoint& d : detections) centre += d.position;
-  centre /= static_cast<double>(detections.size());
+  const Eigen::Vector3d centre = centreOf(detections);
   const std::vector<Hypothesis> hypotheses =
       pairHypotheses(detections, objects, R_g, centre, config, drift);
   // The best within the odometry's reach, and the best of all (to say why one is refused).

@@ -331,9 +331,8 @@ Relocalisation SceneEstimator::relocaliseCamera(const ScoredDetections& detectio
   }
   const Relocalisation r =
       relocalise(seen, mapped, config_.gravity, config_.relocalisation, driftSinceAnchor(seen));
-  if (r.agreed) relocalisation_anchor_ = static_cast<int>(t);
+  if (r.agreed || r.applied) relocalisation_anchor_ = static_cast<int>(t);
   if (!r.applied) return r;
-  relocalisation_anchor_ = static_cast<int>(t);
   if (t == 0) {  // a resumed map: the first camera is placed through it
     T_map_cam_[0] = r.T_correction * T_map_cam_[0];
     return r;
@@ -349,9 +348,7 @@ Relocalisation SceneEstimator::relocaliseCamera(const ScoredDetections& detectio
 // detections agreed with it (relocalisation.h); unknown (no gate) on a resumed map until then.
 OdometryDrift SceneEstimator::driftSinceAnchor(const std::vector<LabelledPoint>& seen) const {
   if (relocalisation_anchor_ < 0 || seen.empty()) return OdometryDrift();
-  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-  for (const LabelledPoint& d : seen) centre += d.position;
-  centre /= static_cast<double>(seen.size());
+  const Eigen::Vector3d centre = centreOf(seen);
   const std::size_t anchor =
       std::min(static_cast<std::size_t>(relocalisation_anchor_), T_odom_cam_.size() - 1);
   const std::vector<Eigen::Isometry3d> path(

@@ -88,6 +88,10 @@ struct LabelledPoint {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
 };
 
+/// The mean position of `points` (zero for none): the detections' centre the corrections and the
+/// drift are measured at.
+Eigen::Vector3d centreOf(const std::vector<LabelledPoint>& points);
+
 struct Relocalisation {
   bool tried = false;    ///< few detections were on the map: a correction was searched
   bool applied = false;  ///< a correction was found (T_correction)
