@@ -20,7 +20,7 @@ PACKAGES=(
   libeigen3-dev libceres-dev libpcl-conversions-dev libopencv-dev libmrpt-poses-dev libfcl-dev
   liboctomap-dev libosmesa6-dev libmeshoptimizer-dev nlohmann-json3-dev libbullet-dev libassimp-dev libyaml-cpp-dev libgtest-dev
   # tools, tests, screenshots
-  python3-numpy python3-yaml python3-matplotlib python3-venv python3-pip xvfb imagemagick
+  python3-numpy python3-scipy python3-yaml python3-matplotlib python3-venv python3-pip xvfb imagemagick
 )
 
 installed=$(dpkg-query -W -f='${Package} ${db:Status-Abbrev}\n' "${PACKAGES[@]}" 2>/dev/null \

@@ -88,6 +88,14 @@ void RecordingWriter::writeTransforms(const ros::Time& stamp, const Eigen::Isome
   bag_->write("/tf", stamp, tf);
 }
 
+void RecordingWriter::writeCameraPose(const ros::Time& stamp,
+                                      const Eigen::Isometry3d& T_odom_optical) {
+  tf2_msgs::TFMessage tf;
+  tf.transforms.push_back(
+      transform(T_odom_optical, stamp, layout_.odom_frame, layout_.optical_frame));
+  bag_->write("/tf", stamp, tf);
+}
+
 void RecordingWriter::writeOdometry(const ros::Time& stamp, const Eigen::Isometry3d& T_odom_base) {
   nav_msgs::Odometry msg;
   msg.header.stamp = stamp;

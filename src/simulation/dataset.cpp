@@ -293,6 +293,10 @@ bool writeGroundTruth(const std::string& path, const GroundTruth& gt, std::strin
   out << YAML::Key << "scene_seed" << YAML::Value << gt.scene_seed;
   out << YAML::Key << "model_set" << YAML::Value << gt.model_set;
   out << YAML::Key << "detector" << YAML::Value << gt.detector;
+  if (gt.platform != "robot" || gt.odometry != "wheel") {  // the generated suites' files unchanged
+    out << YAML::Key << "platform" << YAML::Value << gt.platform;
+    out << YAML::Key << "odometry" << YAML::Value << gt.odometry;
+  }
   out << YAML::Key << "frame_ids" << YAML::Value << YAML::Flow << YAML::BeginMap;
   out << YAML::Key << "map" << YAML::Value << gt.map_frame;
   out << YAML::Key << "odom" << YAML::Value << gt.odom_frame;
@@ -406,6 +410,15 @@ bool readGroundTruth(const std::string& path, const ModelSet& models, GroundTrut
     g.scene_seed = root["scene_seed"].as<unsigned>(0);
     g.model_set = root["model_set"].as<std::string>("");
     g.detector = root["detector"].as<std::string>("");
+    g.platform = root["platform"].as<std::string>("robot");
+    g.odometry = root["odometry"].as<std::string>("wheel");
+    if (g.platform != "robot" && g.platform != "hand_held") {
+      throw std::runtime_error("platform must be robot or hand_held, not '" + g.platform + "'");
+    }
+    if (g.odometry != "wheel" && g.odometry != "camera_trajectory" && g.odometry != "none") {
+      throw std::runtime_error("odometry must be wheel, camera_trajectory or none, not '" +
+                               g.odometry + "'");
+    }
     const YAML::Node ids = root["frame_ids"];
     g.map_frame = ids["map"].as<std::string>();
     g.odom_frame = ids["odom"].as<std::string>();

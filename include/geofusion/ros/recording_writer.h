@@ -56,6 +56,9 @@ class RecordingWriter {
   /// /tf: odom -> base_link and, when given, the moving head base_link -> head_camera_link.
   void writeTransforms(const ros::Time& stamp, const Eigen::Isometry3d& T_odom_base,
                        const Eigen::Isometry3d* T_base_link = nullptr);
+  /// /tf: odom -> the optical frame, for a hand-held camera (no robot base, no wheel odometry):
+  /// the camera's own trajectory (imported datasets, docs/dataset.md "Real recordings").
+  void writeCameraPose(const ros::Time& stamp, const Eigen::Isometry3d& T_odom_optical);
   /// nav_msgs/Odometry; twist from the previous call's pose (in the child frame), covariances
   /// of a wheel odometry (documented in docs/dataset.md).
   void writeOdometry(const ros::Time& stamp, const Eigen::Isometry3d& T_odom_base);

@@ -95,6 +95,13 @@ struct GroundTruth {
   unsigned scene_seed = 0;  ///< the seed the clutter scene settled with (makeSuiteScene)
   std::string model_set;    ///< name of the model set the classes come from
   std::string detector;     ///< detector preset
+  /// "robot" (a base with wheel odometry, the generated suites) or "hand_held" (an imported real
+  /// sequence: no base, the camera is its own base frame).
+  std::string platform = "robot";
+  /// What the recording's odometry is: "wheel" (drifting wheel odometry on /odom and /tf),
+  /// "camera_trajectory" (hand-held: the dataset's camera poses on /tf as odom -> camera, i.e.
+  /// the truth) or "none" (no pose at all: run with the visual odometry).
+  std::string odometry = "wheel";
   PinholeIntrinsics intrinsics;
   std::string map_frame = kMapFrame, odom_frame = kOdomFrame, base_frame = kBaseFrame,
               camera_link_frame = kCameraLinkFrame, camera_frame = kOpticalFrame;
