@@ -680,3 +680,133 @@ double alongRayError(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d&
 }
 
 }  // namespace geofusion
+
+namespace geofusion {
+
+DepthStatisticsAccumulator::DepthStatisticsAccumulator(std::vector<double> bin_upper_m)
+    : bin_upper_m_(std::move(bin_upper_m)), residuals_(bin_upper_m_.size()) {}
+
+void DepthStatisticsAccumulator::add(const PinholeIntrinsics& K, const std::vector<float>& observed,
+                                     const std::vector<float>& clean,
+                                     const std::vector<std::uint16_t>& instance) {
+  const int W = K.width, H = K.height;
+  auto at = [W](const std::vector<float>& d, int u, int v) {
+    return d[static_cast<std::size_t>(v) * W + u];
+  };
+  cv::Mat not_edge(H, W, CV_8U, cv::Scalar(1));
+  for (int v = 0; v < H; ++v) {
+    for (int u = 0; u < W; ++u) {
+      const float z = at(clean, u, v);
+      if (!(z > 0.f)) continue;
+      for (const auto& [du, dv] : {std::make_pair(1, 0), std::make_pair(0, 1)}) {
+        if (u + du >= W || v + dv >= H) continue;
+        const float zn = at(clean, u + du, v + dv);
+        if (zn > 0.f && std::abs(zn - z) > 0.02f) {
+          not_edge.at<std::uint8_t>(v, u) = 0;
+          not_edge.at<std::uint8_t>(v + dv, u + du) = 0;
+        }
+      }
+    }
+  }
+  cv::Mat distance;
+  cv::distanceTransform(not_edge, distance, cv::DIST_L2, 3);
+  for (int v = 0; v < H; ++v) {
+    for (int u = 0; u < W; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * W + u;
+      const float z = clean[i], o = observed[i];
+      if (!(z > 0.f)) continue;
+      const float d = distance.at<float>(v, u);
+      const bool reading = o > 0.f;
+      if (d <= 3.f) {
+        ++edge_pixels_;
+        edge_holes_ += !reading;
+      }
+      if (d <= 10.5f && reading) {
+        const int k = static_cast<int>(std::lround(d));
+        ++band_readings_[k];
+        band_bad_[k] += std::abs(o - z) > 0.01f;
+      }
+      if (instance[i] != 0) {
+        if (d <= 3.f) continue;
+        ++object_pixels_;
+        object_holes_ += !reading;
+        if (!reading) continue;
+        for (std::size_t b = 0; b < bin_upper_m_.size(); ++b) {
+          if (z < bin_upper_m_[b]) {
+            residuals_[b].push_back(std::abs(o - z));
+            break;
+          }
+        }
+        continue;
+      }
+      bool object_right = false, object_left = false;
+      for (int k = 1; k <= 6; ++k) {
+        object_right |= u + k < W && instance[i + k] != 0;
+        object_left |= u - k >= 0 && instance[i - k] != 0;
+      }
+      if (object_right && !object_left) ++left_, left_holes_ += !reading;
+      if (object_left && !object_right) ++right_, right_holes_ += !reading;
+    }
+  }
+}
+
+DepthStatistics DepthStatisticsAccumulator::result() const {
+  DepthStatistics s;
+  s.bin_upper_m = bin_upper_m_;
+  for (const auto& r : residuals_) {
+    s.bin_pixels.push_back(static_cast<long>(r.size()));
+    std::vector<float> sorted = r;
+    if (sorted.empty()) {
+      s.median_abs_residual_m.push_back(std::nan(""));
+      continue;
+    }
+    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+    s.median_abs_residual_m.push_back(sorted[sorted.size() / 2]);
+  }
+  auto share = [](long part, long whole) { return whole > 0 ? double(part) / whole : 0.0; };
+  s.object_invalid = share(object_holes_, object_pixels_);
+  s.edge_invalid = share(edge_holes_, edge_pixels_);
+  for (std::size_t k = 0; k < band_bad_.size(); ++k) {
+    s.edge_band_px += share(band_bad_[k], band_readings_[k]);
+  }
+  s.left_of_objects_invalid = share(left_holes_, left_);
+  s.right_of_objects_invalid = share(right_holes_, right_);
+  return s;
+}
+
+std::vector<float> cleanDepthOf(const PinholeIntrinsics& K, const std::vector<float>& real,
+                                const std::vector<float>& rendered,
+                                const std::vector<std::uint16_t>& instance) {
+  const int W = K.width, H = K.height;
+  std::vector<float> clean(real.size(), 0.f);
+  for (int v = 0; v < H; ++v) {
+    const std::size_t row = static_cast<std::size_t>(v) * W;
+    for (int u = 0; u < W; ++u) {
+      const std::size_t i = row + u;
+      if (instance[i] != 0) {
+        clean[i] = rendered[i];
+        continue;
+      }
+      if (real[i] > 0.f) {
+        clean[i] = real[i];
+        continue;
+      }
+      // A hole in the background: the nearest background readings on each side of the row.
+      float left = 0.f, right = 0.f;
+      int lu = u - 1, ru = u + 1;
+      while (lu >= 0 && instance[row + lu] == 0 && !(real[row + lu] > 0.f)) --lu;
+      while (ru < W && instance[row + ru] == 0 && !(real[row + ru] > 0.f)) ++ru;
+      if (lu >= 0 && instance[row + lu] == 0) left = real[row + lu];
+      if (ru < W && instance[row + ru] == 0) right = real[row + ru];
+      if (left > 0.f && right > 0.f) {
+        const float t = static_cast<float>(u - lu) / static_cast<float>(ru - lu);
+        clean[i] = (1.f - t) * left + t * right;
+      } else {
+        clean[i] = std::max(left, right);
+      }
+    }
+  }
+  return clean;
+}
+
+}  // namespace geofusion

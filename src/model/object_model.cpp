@@ -1,5 +1,7 @@
 #include "geofusion/model/object_model.h"
 
+#include "geofusion/common/enum_names.h"
+
 #include <yaml-cpp/yaml.h>
 
 #include <cstdlib>
@@ -120,6 +122,22 @@ const ObjectModel* ModelSet::findById(int id) const {
   return nullptr;
 }
 
+namespace {
+constexpr std::pair<SurfaceMaterial, const char*> kMaterialNames[] = {
+    {SurfaceMaterial::kDiffuse, "diffuse"},
+    {SurfaceMaterial::kDark, "dark"},
+    {SurfaceMaterial::kSpecular, "specular"},
+    {SurfaceMaterial::kTransparent, "transparent"},
+};
+}  // namespace
+
+const char* toString(SurfaceMaterial material) {
+  return nameIn(kMaterialNames, material);
+}
+bool parseSurfaceMaterial(const std::string& name, SurfaceMaterial* material) {
+  return parseIn(kMaterialNames, name, material);
+}
+
 ModelSet ModelSet::builtinPrimitives() {
   ModelSet set;
   set.name_ = "primitives";
@@ -205,6 +223,10 @@ bool ModelSet::load(const std::string& yaml_path, const std::string& models_dir,
         for (auto& p : m.points) p *= static_cast<float>(c["scale"].as<double>(1.0));
       }
       m.symmetry = parseSymmetry(c["symmetry"]);
+      if (c["material"] && !parseSurfaceMaterial(c["material"].as<std::string>(), &m.material)) {
+        throw std::runtime_error("unknown material '" + c["material"].as<std::string>() +
+                                 "' (diffuse, dark, specular, transparent)");
+      }
       if (c["features"]) m.features = parseFeatures(c["features"]);
       out.add(std::move(m), features);
     } catch (const std::exception& e) {

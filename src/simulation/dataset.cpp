@@ -51,6 +51,7 @@ bool suiteByName(const std::string& name, SuiteSpec* suite) {
     s.clutter.lean_fraction = 0.2;  // objects leaning on others (issue 20)
     s.detector_name = rgb ? "rgb" : name == "bench" ? "densefusion_persistent" : "densefusion";
     DetectorModel::byName(s.detector_name, &s.detector);
+    s.depth = DepthNoise::structuredLight();  // the Fetch head camera, calibrated (issue 31)
   } else if (name == "vo" || name == "vo_fast") {
     // Visual odometry: every 30 Hz frame has images, table and floor are textured. "vo": the
     // table orbit of the other suites (15 s); "vo_fast": 10 s with a faster orbit and the head
@@ -99,10 +100,8 @@ std::string describeSuite(const SuiteSpec& s) {
     << c.touch_distance_m << "; trajectory " << t.min_distance_m << " " << t.max_distance_m << " "
     << t.min_height_m << " " << t.max_height_m << " " << t.arc_rad << " " << t.pause_fraction
     << "; odometry " << n.translation_fraction << " " << n.yaw_rad_per_m << " "
-    << n.translation_m_per_sqrt_m << " " << n.yaw_rad_per_sqrt_rad << "; depth " << d.sigma_base_m
-    << " " << d.sigma_quad_m << " " << d.quantisation_m << " " << d.edge_jump_m << " "
-    << d.edge_dropout << " " << d.grazing_angle_deg << " " << d.grazing_dropout << " "
-    << d.max_range_m << "; detector " << m.translation_sigma_m << " " << m.rotation_sigma_rad << " "
+    << n.translation_m_per_sqrt_m << " " << n.yaw_rad_per_sqrt_rad << "; depth " << d.describe()
+    << "; detector " << m.translation_sigma_m << " " << m.rotation_sigma_rad << " "
     << m.gross_error_rate << " " << m.symmetric_flip_rate << " " << m.class_swap_rate << " "
     << m.miss_rate << " " << m.miss_occlusion_gain << " " << m.min_visible_pixels << " "
     << m.false_positives_per_frame;

@@ -144,55 +144,6 @@ DriftStats measureDrift(const std::vector<FramePose>& poses) {
   return s;
 }
 
-void applyDepthNoise(const PinholeIntrinsics& K, const DepthNoise& noise, std::mt19937& rng,
-                     std::vector<float>* depth) {
-  std::normal_distribution<float> gauss(0.f, 1.f);
-  std::uniform_real_distribution<float> uni(0.f, 1.f);
-  const int W = K.width, H = K.height;
-  const std::vector<float> clean = *depth;
-  auto at = [&](int u, int v) { return clean[static_cast<std::size_t>(v) * W + u]; };
-  const double cos_grazing = std::cos(noise.grazing_angle_deg * M_PI / 180.0);
-  for (int v = 0; v < H; ++v) {
-    for (int u = 0; u < W; ++u) {
-      float& z = (*depth)[static_cast<std::size_t>(v) * W + u];
-      if (!(z > 0.f)) continue;
-      if (z > noise.max_range_m) {
-        z = 0.f;
-        continue;
-      }
-      // Holes beside depth discontinuities.
-      bool edge = false;
-      for (const auto& d : {std::make_pair(1, 0), std::make_pair(-1, 0), std::make_pair(0, 1),
-                            std::make_pair(0, -1)}) {
-        const int uu = u + d.first, vv = v + d.second;
-        if (uu < 0 || vv < 0 || uu >= W || vv >= H) continue;
-        const float zn = at(uu, vv);
-        if (zn <= 0.f || std::abs(zn - at(u, v)) > noise.edge_jump_m) edge = true;
-      }
-      if (edge && uni(rng) < noise.edge_dropout) {
-        z = 0.f;
-        continue;
-      }
-      // Holes at grazing angles: surface normal from the clean neighbours.
-      if (u + 1 < W && v + 1 < H && at(u + 1, v) > 0.f && at(u, v + 1) > 0.f) {
-        const Eigen::Vector3d p = K.backProject(u, v, at(u, v));
-        const Eigen::Vector3d n = (K.backProject(u + 1, v, at(u + 1, v)) - p)
-                                      .cross(K.backProject(u, v + 1, at(u, v + 1)) - p);
-        if (n.norm() > 0 && std::abs(n.normalized().dot(p.normalized())) < cos_grazing &&
-            uni(rng) < noise.grazing_dropout) {
-          z = 0.f;
-          continue;
-        }
-      }
-      const double dz = z - 0.4;
-      const double sigma = noise.sigma_base_m + noise.sigma_quad_m * dz * dz;
-      z = static_cast<float>(z + sigma * gauss(rng));
-      if (noise.quantisation_m > 0)
-        z = static_cast<float>(std::round(z / noise.quantisation_m) * noise.quantisation_m);
-    }
-  }
-}
-
 DetectorModel DetectorModel::denseFusionPersistent() {
   DetectorModel m;
   // DenseFusion's per-frame error (YCB-Video ADD-S AUC 93.1, about 7 mm) split into a bias that
@@ -367,7 +318,10 @@ SequenceFrame SequenceRenderer::render(const FramePose& pose, const DepthNoise& 
       K_, items, &f.images, PixelBox{},
       OffscreenRenderer::kDepth | OffscreenRenderer::kInstance | OffscreenRenderer::kColor);
   f.clean_depth = f.images.depth;
-  applyDepthNoise(K_, depth_noise, rng, &f.images.depth);
+  std::vector<SurfaceMaterial> material_of(scene_.objects.size() + 1, SurfaceMaterial::kDiffuse);
+  for (std::size_t i = 0; i < scene_.objects.size(); ++i)
+    material_of[i + 1] = scene_.objects[i].model->material;
+  applyDepthNoise(K_, depth_noise, rng, &f.images.depth, &f.images.instance, &material_of);
   const std::vector<PixelBox> boxes = measureVisibility(items, T_cam_map, frame, &f);
   stepPersistentErrors(detector, models, rng);
   Draws draws{rng};

@@ -7,6 +7,7 @@
 //   DIR]
 //       [--model-set YAML] [--scenes bench_01,...] [--keyframes N] [--image-every N]
 //       [--detector densefusion|posecnn|densefusion_persistent|rgb]
+//       [--sensor nguyen2012|structured_light|active_stereo|time_of_flight]
 //       [--depth-encoding 16UC1|32FC1] [--no-compression] [--previews N] [--force]
 #include "command_line.h"
 #include "geofusion/evaluation/sequence_calibration.h"
@@ -36,6 +37,7 @@ struct Options {
   int keyframes = -1;
   int image_every = -1;
   std::string detector;  ///< "": the suite's own preset
+  std::string sensor;    ///< "": the suite's own depth camera model
   std::string depth_encoding = "16UC1";
   bool compress = true;
   int previews = 4;
@@ -48,6 +50,7 @@ void usage() {
          "DIR]\n"
          "         [--models DIR] [--model-set YAML] [--scenes NAME,NAME] [--keyframes N]\n"
          "         [--image-every N] [--detector densefusion|posecnn|densefusion_persistent|rgb]\n"
+         "         [--sensor nguyen2012|structured_light|active_stereo|time_of_flight]\n"
          "         [--depth-encoding 16UC1|32FC1]\n"
          "         [--no-compression] [--previews N=4] [--force]\n"
          "  --out-dir      default $GEOFUSION_DATA/<suite>, else ~/.cache/geofusion/data/<suite>\n"
@@ -57,6 +60,8 @@ void usage() {
          "  --detector     detector preset (default the suite's: densefusion_persistent for "
          "bench,\n"
          "                 rgb for bench_rgb, densefusion for the others; docs/dataset.md)\n"
+         "  --sensor       depth camera model (default the suite's: structured_light, the\n"
+         "                 Fetch head camera, for the bench suites; nguyen2012 for the others)\n"
          "  --previews     keyframes per scene written as PNG into <out-dir>/previews\n"
          "  --force        regenerate scenes whose cached files match the request\n";
 }
@@ -80,6 +85,7 @@ Options parse(int argc, char** argv) {
   args.value("--keyframes", &o.keyframes);
   args.value("--image-every", &o.image_every);
   args.value("--detector", &o.detector);
+  args.value("--sensor", &o.sensor);
   args.value("--depth-encoding", &o.depth_encoding);
   args.toggle("--no-compression", &o.compress, false);
   args.value("--previews", &o.previews);
@@ -90,6 +96,11 @@ Options parse(int argc, char** argv) {
   if (!o.detector.empty() && !geofusion::DetectorModel::byName(o.detector, &preset)) {
     throw std::runtime_error(
         "--detector must be densefusion, posecnn, densefusion_persistent or rgb");
+  }
+  geofusion::DepthNoise sensor;
+  if (!o.sensor.empty() && !geofusion::DepthNoise::byName(o.sensor, &sensor)) {
+    throw std::runtime_error(
+        "--sensor must be nguyen2012, structured_light, active_stereo or time_of_flight");
   }
   if (o.keyframes == 0 || o.keyframes < -1 || o.image_every == 0 || o.image_every < -1) {
     throw std::runtime_error("--keyframes and --image-every must be > 0");
@@ -159,6 +170,8 @@ int main(int argc, char** argv) {
     suite.detector_name = opt.detector;
   }
   opt.detector = suite.detector_name;  // what the recordings and the printout say
+  if (!opt.sensor.empty()) DepthNoise::byName(opt.sensor, &suite.depth);
+  opt.sensor = suite.depth.name;
   if (!opt.scenes.empty()) {
     std::vector<SceneSpec> chosen;
     for (const std::string& name : opt.scenes) {
@@ -202,8 +215,8 @@ int main(int argc, char** argv) {
   // What makes a cached scene valid: every option that changes its files.
   std::ostringstream request;
   request << describeSuite(suite) << "; models " << models.name() << " (" << models.size()
-          << " classes); detector " << opt.detector << "; depth " << opt.depth_encoding << "; lz4 "
-          << opt.compress << "\n";
+          << " classes); detector " << opt.detector << "; depth camera " << opt.sensor << "; depth "
+          << opt.depth_encoding << "; lz4 " << opt.compress << "\n";
   // The symmetries change the simulated detector's flips.
   for (const auto& model : models.models())
     request << "  " << model->name << " symmetry " << describe(model->symmetry) << "\n";

@@ -99,6 +99,47 @@ class TruthVisibility {
   std::map<const ObjectModel*, int> meshes_;
 };
 
+/// What a depth camera does to the true depth, measured against a clean depth image (the depth
+/// rendered at the ground truth on object pixels, docs/dataset.md "Sensor models"): the sensor
+/// model's calibration against real frames compares these figures.
+struct DepthStatistics {
+  std::vector<double> bin_upper_m;            ///< object pixels by true depth, bins [.., upper)
+  std::vector<double> median_abs_residual_m;  ///< per bin, readings only (NaN: empty bin)
+  std::vector<long> bin_pixels;
+  double object_invalid = 0.0;  ///< object pixels more than 3 px from an edge with no reading
+  double edge_invalid = 0.0;    ///< pixels within 3 px of a depth edge with no reading
+  /// Width of the error band at edges: over the distances d = 0..10 px from an edge, the sum of
+  /// the shares of readings off by more than 1 cm (px).
+  double edge_band_px = 0.0;
+  /// Background pixels 1-6 px left / right of an object with no reading (the emitter's shadow
+  /// falls on one side).
+  double left_of_objects_invalid = 0.0, right_of_objects_invalid = 0.0;
+};
+
+class DepthStatisticsAccumulator {
+ public:
+  explicit DepthStatisticsAccumulator(std::vector<double> bin_upper_m = {0.7, 1.0, 1.3});
+  /// One frame: `observed` and `clean` depth (metres, 0 = none), `instance` per pixel (0 =
+  /// background, else an object).
+  void add(const PinholeIntrinsics& K, const std::vector<float>& observed,
+           const std::vector<float>& clean, const std::vector<std::uint16_t>& instance);
+  DepthStatistics result() const;
+
+ private:
+  std::vector<double> bin_upper_m_;
+  std::vector<std::vector<float>> residuals_;  ///< per bin
+  long object_pixels_ = 0, object_holes_ = 0, edge_pixels_ = 0, edge_holes_ = 0;
+  long left_ = 0, left_holes_ = 0, right_ = 0, right_holes_ = 0;
+  std::vector<long> band_readings_ = std::vector<long>(11, 0), band_bad_ = std::vector<long>(11, 0);
+};
+
+/// The clean depth of a real frame: `rendered` (the ground truth's objects) where `instance` is
+/// an object, else the real depth with its holes filled along each row from the background beside
+/// them (never across an object).
+std::vector<float> cleanDepthOf(const PinholeIntrinsics& K, const std::vector<float>& real,
+                                const std::vector<float>& rendered,
+                                const std::vector<std::uint16_t>& instance);
+
 /// One row of a BOP-challenge results file (scene_id,im_id,obj_id,score,R,t,time).
 struct BopEstimate {
   int scene_id = 0, im_id = 0, obj_id = 0;

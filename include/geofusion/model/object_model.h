@@ -20,9 +20,17 @@ struct Symmetry {
   std::vector<Eigen::Quaterniond> rotations;        ///< kDiscrete: non-identity symmetries
 };
 
+/// What a depth camera's light does on the object's surface (the sensor models of the data
+/// generator; the estimator does not use it): diffuse returns it, dark absorbs it, specular
+/// mirrors it away, transparent lets it through.
+enum class SurfaceMaterial { kDiffuse, kDark, kSpecular, kTransparent };
+const char* toString(SurfaceMaterial material);
+bool parseSurfaceMaterial(const std::string& name, SurfaceMaterial* material);
+
 struct ObjectModel {
-  std::string name;  ///< class label, e.g. "003_cracker_box"
-  int id = -1;       ///< class id
+  std::string name;                                      ///< class label, e.g. "003_cracker_box"
+  int id = -1;                                           ///< class id
+  SurfaceMaterial material = SurfaceMaterial::kDiffuse;  ///< model-set key `material`
   TriangleMesh mesh;
   std::string mesh_path;                ///< file the mesh came from; empty for primitives
   std::vector<Eigen::Vector3f> points;  ///< evaluation points (ADD/ADD-S), model frame

@@ -8,6 +8,7 @@
 #include "geofusion/common/measurement.h"
 #include "geofusion/render/renderer.h"
 #include "geofusion/simulation/clutter_scene.h"
+#include "geofusion/simulation/depth_sensor.h"
 #include "geofusion/simulation/detector_errors.h"
 
 #include <Eigen/Geometry>
@@ -78,20 +79,6 @@ struct DriftStats {
   double path_length_m = 0.0;
 };
 DriftStats measureDrift(const std::vector<FramePose>& poses);
-
-/// Structured-light depth noise (Carmine class; see docs/dataset.md).
-struct DepthNoise {
-  double sigma_base_m = 0.0012;  ///< sigma(z) = base + quad * (z - 0.4)^2
-  double sigma_quad_m = 0.0019;
-  double quantisation_m = 0.001;
-  double edge_jump_m = 0.02;        ///< pixels beside a depth jump larger than this ...
-  double edge_dropout = 0.5;        ///< ... lose their depth with this probability
-  double grazing_angle_deg = 78.0;  ///< surfaces seen more obliquely lose their depth ...
-  double grazing_dropout = 0.8;     ///< ... with this probability
-  double max_range_m = 4.0;         ///< beyond: no depth
-};
-void applyDepthNoise(const PinholeIntrinsics& K, const DepthNoise& noise, std::mt19937& rng,
-                     std::vector<float>* depth);
 
 /// Detector error model. Defaults: DenseFusion-like (YCB-Video ADD-S AUC about 93, about 97 %
 /// under 2 cm); posecnn() is the harsher PoseCNN-like preset (AUC about 76).
