@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The benchmark (docs/BENCHMARK.md): generates or reuses each suite (SUITE="bench bench_rgb
-# bench_iid" by default, or one of them, or demo), runs FbF, B-SLAM, R-Front and GeoFusion on every
+# bench_iid" by default, or one of them, or demo, or real: the real frames imported), runs FbF, B-SLAM, R-Front and GeoFusion on every
 # scene with the offline runner, evaluates each run against the ground truth (evaluate_run) and
 # writes report.md, summary.json and the figures (bench_report.py, COCO mAP by pycocotools) to
 # results/<suite>/ (or BENCH_OUT/<suite> with several suites, BENCH_OUT with one); with several
@@ -41,7 +41,19 @@ models=()
 start=$(date +%s)
 
 say "benchmark on suite '$suite': data in $data, results in $out"
-"$bin/generate_dataset" --suite "$suite" --out-dir "$data" "${models[@]}" | grep -E "^generate_dataset:" || true
+if [ "$suite" = real ]; then  # the real frames of ../shared/data/real, imported (make bench-real)
+  real="${GEOFUSION_REAL_DIR:-$GEOFUSION_SRC/../shared/data/real}"
+  [ -d "$real/ycbv_video" ] || { say "no real frames in $real (GEOFUSION_REAL_DIR)"; exit 1; }
+  for video in "$real"/ycbv_video/[0-9]*/; do
+    name="ycbv_$(basename "$video")"
+    # Detections from the truth, 2-4 cm off along the ray (a colour-only estimator's error).
+    "$bin/import_dataset" --in "$video" --out-dir "$data" --name "$name" --ray-bias 0.02,0.04 \
+      "${models[@]}" --quiet
+  done
+  PARAMS="${PARAMS:-$GEOFUSION_SRC/bench/params/real_frames.yaml}"  # every 30 Hz frame a keyframe
+else
+  "$bin/generate_dataset" --suite "$suite" --out-dir "$data" "${models[@]}" | grep -E "^generate_dataset:" || true
+fi
 mkdir -p "$out/runs" "$out/eval"
 shopt -s nullglob
 bags=()

@@ -21,6 +21,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <map>
 #include <sstream>
@@ -349,6 +350,13 @@ bool Importer::write(std::string* error) {
   gt.scene.table.height_m = 0.0;
   gt.scene.table.size_x_m = gt.scene.table.size_y_m = gt.scene.table.thickness_m = 0.0;
   if (!geofusion::writeGroundTruth(gt_path, gt, error)) return false;
+  // What it was made from (the benchmark lists a data folder's recordings by these files).
+  std::ofstream((fs::path(opt.out_dir) / (opt.name + ".request")).string())
+      << "import_dataset " << seq.format << " " << fs::absolute(opt.in).string() << "; model set "
+      << models.name() << "; detections " << opt.detections << " " << opt.detector.ray_bias_min_m
+      << " " << opt.detector.ray_bias_max_m << " " << opt.detector.translation_sigma_m << " "
+      << opt.detector.rotation_sigma_rad << " seed " << opt.detector.seed << "; camera poses "
+      << opt.camera_poses << "\n";
   std::error_code ec;
   fs::rename(bag_path + ".tmp", bag_path, ec);
   if (ec) {
