@@ -2,6 +2,7 @@
 
 #include "geofusion/common/atomic_file.h"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -23,7 +24,20 @@ Eigen::Isometry3d alignTrajectories(const std::vector<Eigen::Vector3d>& est,
     src.col(static_cast<Eigen::Index>(i)) = est[i];
     dst.col(static_cast<Eigen::Index>(i)) = truth[i];
   }
-  T.matrix() = Eigen::umeyama(src, dst, false);
+  // A camera held (nearly) still leaves the rotation to the noise: then only the offset of the
+  // means is taken.
+  const Eigen::Vector3d mean = dst.rowwise().mean();
+  const Eigen::Matrix3d spread =
+      (dst.colwise() - mean) * (dst.colwise() - mean).transpose() / static_cast<double>(est.size());
+  const Eigen::Vector3d extent = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(spread)
+                                     .eigenvalues()
+                                     .cwiseMax(0.0)
+                                     .cwiseSqrt();  // ascending
+  if (extent[2] < kMinAlignmentSpreadM) {
+    T.translation() = mean - src.rowwise().mean();
+  } else {
+    T.matrix() = Eigen::umeyama(src, dst, false);
+  }
   if (!T.matrix().allFinite()) return Eigen::Isometry3d::Identity();
   double sq = 0.0;
   for (std::size_t i = 0; i < est.size(); ++i) sq += (T * est[i] - truth[i]).squaredNorm();

@@ -59,6 +59,7 @@ bool suiteByName(const std::string& name, SuiteSpec* suite) {
     s.model_set = "primitives";
     s.image_every = 1;
     s.textured_background = true;
+    s.colour = ColourNoise::fetchHead();  // blur and rolling shutter as the head turns (issue 31)
     s.clutter.area_x_m = 0.36;
     s.clutter.area_y_m = 0.26;
     if (name == "vo") {
@@ -111,6 +112,7 @@ std::string describeSuite(const SuiteSpec& s) {
       t.look_rate != TrajectoryConfig().look_rate)
     o << "; look " << t.look_amplitude_m << " " << t.look_rate;
   if (s.textured_background) o << "; textured background";
+  if (s.colour.enabled) o << "; colour " << s.colour.describe();
   const PersistentErrorModel& e = m.persistence;
   if (e.enabled() || e.score_correctness != PersistentErrorModel().score_correctness) {
     o << "; persistent " << e.bias_translation_m << " " << e.bias_rotation_rad << " "

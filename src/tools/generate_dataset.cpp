@@ -17,6 +17,7 @@
 #include "model_set_option.h"
 
 #include <sys/stat.h>
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -64,6 +65,15 @@ void usage() {
          "                 Fetch head camera, for the bench suites; nguyen2012 for the others)\n"
          "  --previews     keyframes per scene written as PNG into <out-dir>/previews\n"
          "  --force        regenerate scenes whose cached files match the request\n";
+}
+
+/// The median of a depth image's readings (0 when it has none).
+double medianDepth(std::vector<float> depth) {
+  depth.erase(std::remove_if(depth.begin(), depth.end(), [](float z) { return !(z > 0.f); }),
+              depth.end());
+  if (depth.empty()) return 0.0;
+  std::nth_element(depth.begin(), depth.begin() + depth.size() / 2, depth.end());
+  return depth[depth.size() / 2];
 }
 
 std::vector<std::string> split(const std::string& s) {
@@ -294,6 +304,8 @@ int main(int argc, char** argv) {
     gt.camera_frame = layout.optical_frame;
 
     std::mt19937 rng(spec.seed + 2000);
+    // The colour camera's own random numbers: depth and detections stay as they were.
+    ColourCamera colour(suite.colour, spec.seed + 3000);
     const ros::Time t0(suite.stamp_origin_s);
     writer.writeStaticTransforms(t0, RobotGeometry::cameraLinkToOptical());
     const int preview_every =
@@ -313,8 +325,13 @@ int main(int argc, char** argv) {
       g.T_map_optical = pose.T_map_optical;
       g.keyframe = suite.isKeyframe(static_cast<int>(k));
       if (g.keyframe) {
-        const SequenceFrame f =
+        SequenceFrame f =
             renderer.render(pose, suite.depth, suite.detector, models, rng, static_cast<int>(k));
+        if (suite.colour.enabled) {
+          const FramePose& before = poses[k > 0 ? k - 1 : k];
+          colour.apply(K, before.T_map_optical, pose.T_map_optical, 1.0 / suite.camera_rate_hz,
+                       medianDepth(f.images.depth), &f.images.rgb);
+        }
         writer.writeImages(stamp, K, f.images.rgb, f.images.depth);
         // A detector answers after its processing time; the header keeps the image stamp.
         writer.writeDetections(stamp, stamp + ros::Duration(0.1), f.detections);

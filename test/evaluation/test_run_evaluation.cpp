@@ -3,6 +3,7 @@
 // of the wrong type, objects sunk into or floating above the table, a map frame that is not the
 // ground truth's; and the results file round trip it reads.
 #include "geofusion/evaluation/run_evaluation.h"
+#include "geofusion/evaluation/trajectory_metrics.h"
 
 #include "geofusion/estimation/run_results.h"
 #include "geofusion/model/object_model.h"
@@ -22,6 +23,33 @@ Eigen::Isometry3d translation(double x, double y, double z) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.translation() = Eigen::Vector3d(x, y, z);
   return T;
+}
+
+// A camera held nearly still (the real YCB-Video frames move 4 mm) leaves the rotation of the
+// alignment to the noise: only the offset is taken, so the map is not turned about the camera.
+TEST(TrajectoryAlignment, AStillCameraIsAlignedByItsOffsetAlone) {
+  std::vector<Eigen::Vector3d> truth, est;
+  for (int k = 0; k < 10; ++k) {
+    truth.emplace_back(0.001 * k, 0.0005 * (k % 3), 0.4);
+    // Estimated 2 cm off, with 1 mm of noise that a rotation could "explain".
+    est.push_back(truth.back() + Eigen::Vector3d(0.02, 0.0, 0.0) +
+                  0.001 * Eigen::Vector3d(std::sin(k), std::cos(3 * k), std::sin(7 * k)));
+  }
+  double rmse = 0.0;
+  const Eigen::Isometry3d T = alignTrajectories(est, truth, &rmse);
+  EXPECT_LT((T.linear() - Eigen::Matrix3d::Identity()).norm(), 1e-12);
+  EXPECT_NEAR(T.translation().x(), -0.02, 0.001);
+  EXPECT_LT(rmse, 0.002);
+  // A trajectory spanning a plane is aligned in full: a turned copy is turned back.
+  std::vector<Eigen::Vector3d> arc, turned;
+  const Eigen::AngleAxisd turn(0.3, Eigen::Vector3d::UnitZ());
+  for (int k = 0; k < 20; ++k) {
+    arc.emplace_back(std::cos(0.1 * k), std::sin(0.1 * k), 1.0);
+    turned.push_back(turn * arc.back());
+  }
+  const Eigen::Isometry3d U = alignTrajectories(turned, arc, &rmse);
+  EXPECT_NEAR(Eigen::AngleAxisd(U.linear()).angle(), 0.3, 1e-9);
+  EXPECT_LT(rmse, 1e-9);
 }
 
 TEST(ProjectedBox, MatchesAHandComputationAndIsClippedToTheImage) {

@@ -10,8 +10,14 @@
 
 namespace geofusion {
 
+/// A true trajectory whose largest extent (standard deviation about its mean) is below this is a
+/// camera held still: the alignment's rotation is not observable from its positions.
+constexpr double kMinAlignmentSpreadM = 0.02;
+
 /// Rigid transform T_true_est that best maps the estimated positions onto the true ones
-/// (Eigen::umeyama without scale); identity for fewer than 3 pairs. `rmse`: the residual RMSE.
+/// (Eigen::umeyama without scale); only the offset of the means for a camera held still
+/// (kMinAlignmentSpreadM; the real YCB-Video frames move 4 mm);
+/// identity for fewer than 3 pairs. `rmse`: the residual RMSE.
 Eigen::Isometry3d alignTrajectories(const std::vector<Eigen::Vector3d>& est,
                                     const std::vector<Eigen::Vector3d>& truth, double* rmse);
 

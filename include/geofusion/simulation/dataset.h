@@ -5,6 +5,7 @@
 
 #include "geofusion/common/robot_names.h"
 #include "geofusion/simulation/clutter_scene.h"
+#include "geofusion/simulation/colour_camera.h"
 #include "geofusion/simulation/sequence.h"
 
 #include <map>
@@ -44,6 +45,8 @@ struct SuiteSpec {
   double stamp_origin_s = 1600000000.0;       ///< ROS time of the first frame
   /// Table and floor textured (writeBackgroundTextures) instead of plain colours.
   bool textured_background = false;
+  ColourNoise
+      colour;  ///< the colour camera's blur, rolling shutter, exposure and noise (vo suites)
 
   int cameraFrames() const { return (keyframes - 1) * image_every + 1; }
   bool isKeyframe(int frame) const { return image_every > 0 && frame % image_every == 0; }
