@@ -539,21 +539,32 @@ bool TruthVisibility::measure(RealFrame* frame, std::string* error) {
     object_of.push_back(k);
   }
   if (items.empty()) return true;
+  // The scene's render only for visible pixels the folder does not give (no label image, no
+  // scene_gt_info.json); each object alone only for a visible fraction it does not give.
+  const bool need_scene = std::any_of(object_of.begin(), object_of.end(), [&](std::size_t k) {
+    return frame->objects[k].visible_pixels < 0;
+  });
   RenderedImages scene;
-  if (!renderer_->render(frame->K, items, &scene, PixelBox{}, OffscreenRenderer::kInstance)) {
+  if (need_scene &&
+      !renderer_->render(frame->K, items, &scene, PixelBox{}, OffscreenRenderer::kInstance)) {
     *error = "frame " + frame->name + ": rendering the ground truth failed: " + renderer_->error();
     return false;
   }
   for (std::size_t i = 0; i < items.size(); ++i) {
     RealObjectTruth& o = frame->objects[object_of[i]];
-    int in_scene = 0, x0 = frame->K.width, y0 = frame->K.height, x1 = -1, y1 = -1;
-    for (int v = 0; v < frame->K.height; ++v) {
-      for (int u = 0; u < frame->K.width; ++u) {
-        if (scene.instanceAt(u, v) != items[i].instance_id) continue;
-        ++in_scene;
-        x0 = std::min(x0, u), y0 = std::min(y0, v), x1 = std::max(x1, u), y1 = std::max(y1, v);
+    if (o.visible_pixels < 0) {
+      int in_scene = 0, x0 = frame->K.width, y0 = frame->K.height, x1 = -1, y1 = -1;
+      for (int v = 0; v < frame->K.height; ++v) {
+        for (int u = 0; u < frame->K.width; ++u) {
+          if (scene.instanceAt(u, v) != items[i].instance_id) continue;
+          ++in_scene;
+          x0 = std::min(x0, u), y0 = std::min(y0, v), x1 = std::max(x1, u), y1 = std::max(y1, v);
+        }
       }
+      o.visible_pixels = in_scene;
+      o.visible_box = in_scene > 0 ? PixelBox{x0, y0, x1 - x0 + 1, y1 - y0 + 1} : PixelBox{};
     }
+    if (o.visible_fraction >= 0.0) continue;  // BOP's scene_gt_info.json has its own
     RenderedImages alone;
     const PixelBox region =
         renderer_->projectedRegion(frame->K, items[i].mesh, items[i].T_cam_model);
@@ -562,17 +573,21 @@ bool TruthVisibility::measure(RealFrame* frame, std::string* error) {
         renderer_->render(frame->K, {items[i]}, &alone, region, OffscreenRenderer::kInstance)) {
       for (std::uint16_t id : alone.instance) alone_pixels += id != 0;
     }
-    if (o.visible_pixels < 0) {
-      o.visible_pixels = in_scene;
-      o.visible_box = in_scene > 0 ? PixelBox{x0, y0, x1 - x0 + 1, y1 - y0 + 1} : PixelBox{};
-    }
-    if (o.visible_fraction < 0.0) {  // BOP's scene_gt_info.json has its own
-      o.visible_fraction = alone_pixels > 0
-                               ? std::min(1.0, static_cast<double>(o.visible_pixels) / alone_pixels)
-                               : 0.0;
-    }
+    o.visible_fraction = alone_pixels > 0
+                             ? std::min(1.0, static_cast<double>(o.visible_pixels) / alone_pixels)
+                             : 0.0;
   }
   return true;
+}
+
+std::vector<std::string> classNamesById(const ModelSet& models) {
+  std::vector<std::string> names;
+  for (const auto& m : models.models()) {
+    if (m->id < 0) continue;
+    if (m->id >= static_cast<int>(names.size())) names.resize(m->id + 1);
+    names[m->id] = m->name;
+  }
+  return names;
 }
 
 bool readBopEstimates(const std::string& path, std::vector<BopEstimate>* estimates,

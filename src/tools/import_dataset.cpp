@@ -177,11 +177,7 @@ bool Importer::loadInputs(std::string* error) {
     *error = "the model set " + opt.model_set + " cannot be loaded";
     return false;
   }
-  for (const auto& m : models.models()) {
-    if (m->id < 0) continue;
-    if (m->id >= static_cast<int>(names.size())) names.resize(m->id + 1);
-    names[m->id] = m->name;
-  }
+  names = geofusion::classNamesById(models);
   if (opt.name.empty()) opt.name = seq.name;
   if (!seq.frames.front().has_camera_pose) {
     std::cerr << "import_dataset: warning: " << opt.in

@@ -40,17 +40,6 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-/// Class names indexed by the model set's class ids (YCB-Video: the dataset's class index).
-std::vector<std::string> namesById(const ModelSet& models) {
-  std::vector<std::string> names;
-  for (const auto& m : models.models()) {
-    if (m->id < 0) continue;
-    if (m->id >= static_cast<int>(names.size())) names.resize(m->id + 1);
-    names[m->id] = m->name;
-  }
-  return names;
-}
-
 struct VideoRun {
   std::vector<double> ray_error_before_m, ray_error_after_m;  ///< |along the ray|, per detection
   int detections = 0, refined = 0;
@@ -69,7 +58,7 @@ VideoRun runVideo(const std::string& dir, const ModelSet& models) {
   EXPECT_TRUE(readRealSequence(dir, "auto", 30.0, &seq, &error)) << error;
   if (seq.frames.empty()) return run;
   EXPECT_EQ(seq.format, "ycbv");
-  const std::vector<std::string> names = namesById(models);
+  const std::vector<std::string> names = classNamesById(models);
   TruthDetectorModel detector;
   detector.ray_bias_min_m = 0.02;
   detector.ray_bias_max_m = 0.04;

@@ -50,13 +50,12 @@ struct RealFrame {
   std::vector<RealObjectTruth> objects;
 };
 
+/// A sequence of one of these formats is hand-held: no robot base, no wheel odometry; its camera
+/// poses (when given) are the truth.
 struct RealSequence {
   std::string format;  ///< "bop", "ycbv" (BOP files, YCB-Video names), "7scenes", "tum"
   std::string name;    ///< the folder's name
   std::string dir;
-  /// Hand-held camera: no robot base and no wheel odometry; the camera poses (when given) are
-  /// the truth. Every format read here is hand-held.
-  bool hand_held = true;
   std::vector<RealFrame> frames;
 };
 
@@ -151,6 +150,10 @@ struct BopEstimate {
 /// space-separated inside their fields). False with the line number on a malformed row.
 bool readBopEstimates(const std::string& path, std::vector<BopEstimate>* estimates,
                       std::string* error);
+
+/// Class names indexed by the model set's class ids (YCB-Video's: the dataset's class index, BOP's
+/// obj_id); "" for ids without a class.
+std::vector<std::string> classNamesById(const ModelSet& models);
 
 /// Detections made from the ground truth, with the error of a colour-only 6D estimator: per
 /// object a bias along the viewing ray drawn once (magnitude uniform in [min, max], either sign,
