@@ -1,19 +1,21 @@
 # GeoFusion: the two commands a user needs.
-#   make demo   install what is missing, build, and run the demo
+#   make demo   install what is missing, build (not the tests), and run the demo
 #   make test   install what is missing, build, and run every test (exit code = result)
 #   make data SUITE=demo|bench|bench_rgb   generate (or reuse) a data suite in ~/.cache/geofusion/data
 #   make bench [SUITE=demo]      the benchmark: four methods, report in results/<suite>/
 #   make bench-real              every method on the real frames of ../shared/data/real, the visual
 #                                odometry beside Open3D's and OpenCV's; report in results/real/
+#   make live-bench              the robot's launch fed by rosbag play at 1x and 2x, idle and loaded:
+#                                latency frame -> map, drops, CPU; report in results/live/
 #   make vo-bench                the visual odometry benchmark, report in results/vo/
 #   make test-asan               every test built with ASan + UBSan in its own workspace, run by ctest
 #   make fuzz [FUZZ_RUNS=N]      libFuzzer (clang 14) on the input parsers, 1000000 runs per target
 #   make screenshots             README's rviz screenshots (docs/images) by the rviz_screenshots test
 #   make soak [SOAK_KEYFRAMES=N] a long run (tables revisited): time and memory per keyframe, plots
-.PHONY: demo test test-asan fuzz data bench bench-real vo-bench screenshots soak deps build lint clean help
+.PHONY: demo test test-asan fuzz data bench bench-real live-bench vo-bench screenshots soak deps build lint clean help
 
 help:
-	@sed -n '2,12p' Makefile
+	@sed -n '2,14p' Makefile
 
 deps:
 	@bash scripts/install_deps.sh
@@ -30,7 +32,8 @@ test-asan:
 fuzz:
 	@bash scripts/fuzz.sh
 
-demo: build
+demo: deps
+	@GEOFUSION_BUILD_TARGETS=all bash scripts/build.sh
 	@bash scripts/demo.sh
 
 data: build
@@ -41,6 +44,9 @@ bench: build
 
 bench-real: build
 	@bash scripts/bench_real.sh
+
+live-bench: build
+	@bash scripts/live_bench.sh
 
 vo-bench: build
 	@bash scripts/vo_bench.sh

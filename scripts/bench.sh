@@ -8,6 +8,7 @@
 #   MODELS=DIR     YCB-Video models folder (default $GEOFUSION_YCB_DIR, else ../shared/data/ycb_video)
 #   GUARD=1        exit 1 unless GeoFusion beats FbF on mAP50:95 and precision50 (CI's guard)
 #   METHODS="..."  a subset of: fbf fbfr bslam rfront geofusion (fbfr: FbF with depth refinement)
+#   JOBS=N         runs at once (default: the number of cores); the results do not depend on it
 #   PARAMS=FILE    configuration file for every method (run_offline --params; the method itself
 #                  is set per run), PARAMS_<method>=FILE for one method (e.g. PARAMS_geofusion)
 set -euo pipefail
@@ -61,23 +62,42 @@ for request in "$data"/*.request; do  # the suite's own scenes (generate_dataset
   bags+=("${request%.request}.bag")
 done
 [ ${#bags[@]} -gt 0 ] || { say "no recordings in $data"; exit 1; }
-for bag in "${bags[@]}"; do
+# One method on one scene: the run, then its evaluation (its output printed whole at its end).
+run_one() {
+  local bag="$1" method="$2" scene gt model_set results params_var params_file params log
   scene=$(basename "$bag" .bag)
   gt="$data/${scene}_gt.yaml"
   model_set=$(sed -n 's/^model_set: *//p' "$gt" | head -1)
+  results="$out/runs/$scene/$method.yaml"
+  params_var="PARAMS_$method"
+  params_file="${!params_var:-${PARAMS:-}}"
+  params=()
+  [ -n "$params_file" ] && params=(--params "$params_file")
+  log=$(
+    "$bin/run_offline" --bag "$bag" --out "$results" "${params[@]}" --method "$method" \
+      --model-set "$model_set" "${models[@]}" --quiet 2>&1 | sed 's/^run_offline: /  /'
+    "$bin/evaluate_run" --ground-truth "$gt" --results "$results" --model-set "$model_set" \
+      "${models[@]}" --json "$out/eval/$scene/$method.json" --quiet 2>&1
+  ) || { printf '%s\n' "$log"; say "$scene / $method failed"; touch "$results.failed"; return 1; }
+  printf '%s\n' "$log"
+}
+# JOBS runs at once (default: one a core); every run is single-threaded and repeatable, so the
+# results are those of one at a time (times aside: JOBS=1 for time figures on a busy machine).
+jobs_max="${JOBS:-$(nproc)}"
+[[ "$jobs_max" =~ ^[1-9][0-9]*$ ]] || { say "JOBS must be a positive integer (got '$jobs_max')"; exit 2; }
+say "$jobs_max run(s) at once (JOBS)"
+for bag in "${bags[@]}"; do
+  scene=$(basename "$bag" .bag)
   mkdir -p "$out/runs/$scene" "$out/eval/$scene"
   for method in ${METHODS:-fbf fbfr bslam rfront geofusion}; do
-    results="$out/runs/$scene/$method.yaml"
-    params_var="PARAMS_$method"
-    params_file="${!params_var:-${PARAMS:-}}"
-    params=()
-    [ -n "$params_file" ] && params=(--params "$params_file")
-    "$bin/run_offline" --bag "$bag" --out "$results" "${params[@]}" --method "$method" \
-      --model-set "$model_set" "${models[@]}" --quiet | sed 's/^run_offline: /  /'
-    "$bin/evaluate_run" --ground-truth "$gt" --results "$results" --model-set "$model_set" \
-      "${models[@]}" --json "$out/eval/$scene/$method.json" --quiet
+    rm -f "$out/runs/$scene/$method.yaml.failed"
+    while [ "$(jobs -rp | wc -l)" -ge "$jobs_max" ]; do wait -n || true; done
+    run_one "$bag" "$method" &
   done
 done
+wait  # a failed run leaves <results>.failed beside its results
+failed=("$out"/runs/*/*.failed)
+[ ${#failed[@]} -eq 0 ] || { say "${#failed[@]} run(s) failed: ${failed[*]}"; exit 1; }
 say "runs and evaluation took $(( $(date +%s) - start )) s; writing the report"
 guard=()
 [ "${GUARD:-0}" = 1 ] && guard=(--guard)

@@ -21,5 +21,7 @@ if [ ! -f build/.geofusion_configured ]; then
   touch build/.geofusion_configured
 fi
 source devel/setup.bash
-catkin_make -j2 "${CATKIN_PY_ARGS[@]}" "${EXTRA_CMAKE_ARGS[@]}" all tests
+# GEOFUSION_BUILD_TARGETS: what to build (default every target and the tests; make demo: all).
+read -r -a targets <<< "${GEOFUSION_BUILD_TARGETS:-all tests}"
+catkin_make -j2 "${CATKIN_PY_ARGS[@]}" "${EXTRA_CMAKE_ARGS[@]}" "${targets[@]}"
 say "build done"

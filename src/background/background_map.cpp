@@ -8,8 +8,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <sstream>
 
@@ -21,6 +23,9 @@ struct BackgroundMap::Impl {
   std::shared_ptr<OffscreenRenderer> renderer;
   std::map<std::shared_ptr<const ObjectModel>, MeshHandle> meshes;
   RenderedImages rendered;
+  bool inserted_any = false;                                     ///< since the last clear()
+  Eigen::Isometry3d T_map_last = Eigen::Isometry3d::Identity();  ///< camera of the last insert
+  int passed_over = 0;                                           ///< keyframes not wanted since it
 };
 
 BackgroundMap::BackgroundMap(const BackgroundMapConfig& config,
@@ -41,12 +46,72 @@ BackgroundMap::~BackgroundMap() = default;
 
 void BackgroundMap::clear() {
   impl_->tree.clear();
+  impl_->inserted_any = false;
+  impl_->passed_over = 0;
+}
+
+bool BackgroundMap::wanted(const Eigen::Isometry3d& T_map_cam) {
+  if (impl_->inserted_any && impl_->passed_over + 1 < std::max(1, config_.max_interval_keyframes)) {
+    const Eigen::Isometry3d delta = impl_->T_map_last.inverse() * T_map_cam;
+    const double turned = Eigen::AngleAxisd(delta.rotation()).angle() * 180.0 / M_PI;
+    if (delta.translation().norm() < config_.min_translation_m &&
+        turned < config_.min_rotation_deg) {
+      ++impl_->passed_over;
+      return false;
+    }
+  }
+  return true;
 }
 
 std::size_t BackgroundMap::numLeaves() const {
   return impl_->tree.getNumLeafNodes();
 }
 
+void BackgroundMap::prepare(const ModelSet& models) {
+  for (const auto& model : models.models()) meshFor(model);
+}
+
+MeshHandle BackgroundMap::meshFor(const std::shared_ptr<const ObjectModel>& model) {
+  auto it = impl_->meshes.find(model);
+  if (it == impl_->meshes.end()) {
+    // The mask needs the silhouette and the depth to within a voxel's fraction: a light mesh.
+    const MeshHandle h = impl_->renderer->addMesh(simplifyMesh(
+        model->mesh, static_cast<std::size_t>(std::max(1, config_.mask_mesh_triangles)),
+        0.25 * config_.resolution_m));
+    it = impl_->meshes.emplace(model, h).first;  // -1 remembered: a bad mesh is tried once
+  }
+  return it->second;
+}
+
+namespace {
+
+// Grows a mask by `m` cells in both directions (a square structuring element), two passes.
+void dilate(std::vector<char>* mask, int w, int h, int m) {
+  if (m <= 0) return;
+  std::vector<char> rows(mask->size(), 0);
+  for (int v = 0; v < h; ++v) {
+    const char* in = mask->data() + static_cast<std::size_t>(v) * w;
+    char* out = rows.data() + static_cast<std::size_t>(v) * w;
+    for (int u = 0; u < w; ++u) {
+      if (!in[u]) continue;
+      for (int k = std::max(0, u - m); k <= std::min(w - 1, u + m); ++k) out[k] = 1;
+    }
+  }
+  std::fill(mask->begin(), mask->end(), 0);
+  for (int v = 0; v < h; ++v) {
+    const char* in = rows.data() + static_cast<std::size_t>(v) * w;
+    for (int u = 0; u < w; ++u) {
+      if (!in[u]) continue;
+      for (int k = std::max(0, v - m); k <= std::min(h - 1, v + m); ++k)
+        (*mask)[static_cast<std::size_t>(k) * w + u] = 1;
+    }
+  }
+}
+
+}  // namespace
+
+// The sampled pixels (every pixel_stride-th row and column) are a coarser camera of their own:
+// the objects are rendered at that resolution only, and their masks grown in its cells.
 int BackgroundMap::insert(const DepthImageView& depth, const PinholeIntrinsics& K,
                           const Eigen::Isometry3d& T_map_cam,
                           const std::vector<MaskObject>& objects) {
@@ -54,69 +119,130 @@ int BackgroundMap::insert(const DepthImageView& depth, const PinholeIntrinsics& 
       !T_map_cam.matrix().allFinite()) {
     return 0;
   }
-  // The map's objects as the camera sees them: their pixels and depth.
+  const int s = std::max(1, config_.pixel_stride);
+  PinholeIntrinsics Ks = K;  // pixel (i, j) of Ks is pixel (s i, s j) of K
+  Ks.width = (K.width + s - 1) / s;
+  Ks.height = (K.height + s - 1) / s;
+  Ks.fx = K.fx / s, Ks.fy = K.fy / s, Ks.cx = K.cx / s, Ks.cy = K.cy / s;
+  // The map's objects as the sampled pixels see them: their depth, and the pixels near them.
   std::vector<RenderItem> items;
   const Eigen::Isometry3d T_cam_map = T_map_cam.inverse();
   for (const MaskObject& o : objects) {
     if (!o.model) continue;
-    auto it = impl_->meshes.find(o.model);
-    if (it == impl_->meshes.end()) {
-      it = impl_->meshes.emplace(o.model, impl_->renderer->addMesh(o.model->mesh)).first;
-    }
-    if (it->second < 0) continue;
     RenderItem item;
-    item.mesh = it->second;
+    item.mesh = meshFor(o.model);
+    if (item.mesh < 0) continue;
     item.T_cam_model = T_cam_map * o.T_map_obj;
-    item.instance_id = 1;
     items.push_back(item);
   }
-  const std::size_t n = static_cast<std::size_t>(K.width) * K.height;
+  const std::size_t n = static_cast<std::size_t>(Ks.width) * Ks.height;
   std::vector<float> object_depth(n, 0.f);
   std::vector<char> near_object(n, 0);
-  if (!items.empty() && impl_->renderer->ok()) {
-    impl_->renderer->render(K, items, &impl_->rendered, PixelBox{}, OffscreenRenderer::kDepth);
-    const int m = std::max(0, config_.object_margin_px);
-    for (int v = 0; v < K.height; ++v) {
-      for (int u = 0; u < K.width; ++u) {
-        const float z = impl_->rendered.depthAt(u, v);
+  if (!items.empty() && impl_->renderer->ok() &&
+      impl_->renderer->render(Ks, items, &impl_->rendered, PixelBox{}, OffscreenRenderer::kDepth)) {
+    for (int j = 0; j < Ks.height; ++j) {
+      for (int i = 0; i < Ks.width; ++i) {
+        const float z = impl_->rendered.depthAt(i, j);
         if (!(z > 0.f)) continue;
-        object_depth[static_cast<std::size_t>(v) * K.width + u] = z;
-        for (int dv = -m; dv <= m; ++dv) {
-          for (int du = -m; du <= m; ++du) {
-            const int uu = u + du, vv = v + dv;
-            if (uu >= 0 && vv >= 0 && uu < K.width && vv < K.height)
-              near_object[static_cast<std::size_t>(vv) * K.width + uu] = 1;
-          }
-        }
+        object_depth[static_cast<std::size_t>(j) * Ks.width + i] = z;
+        near_object[static_cast<std::size_t>(j) * Ks.width + i] = 1;
       }
     }
+    dilate(&near_object, Ks.width, Ks.height, (std::max(0, config_.object_margin_px) + s - 1) / s);
   }
-  octomap::Pointcloud cloud;
-  const int stride = std::max(1, config_.pixel_stride);
-  for (int v = 0; v < K.height; v += stride) {
-    for (int u = 0; u < K.width; u += stride) {
-      const std::size_t i = static_cast<std::size_t>(v) * K.width + u;
-      const float z = depth.at(u, v);
+  std::vector<Eigen::Vector3d> points;  // map frame
+  std::vector<char> casts;              // whether its ray clears free space
+  const int f = std::max(1, config_.free_space_stride);
+  for (int j = 0; j < Ks.height; ++j) {
+    for (int i = 0; i < Ks.width; ++i) {
+      const std::size_t c = static_cast<std::size_t>(j) * Ks.width + i;
+      const float z = depth.at(s * i, s * j);
       if (!(z > 0.f) || !std::isfinite(z) || z > config_.max_range_m) continue;
-      if (near_object[i]) {
+      if (near_object[c]) {
         // On or behind an object (or at its rim): not background. Clearly in front of it:
         // something else, keep it.
-        const float zo = object_depth[i];
+        const float zo = object_depth[c];
         if (!(zo > 0.f) || z > zo - config_.object_margin_m) continue;
       }
-      const Eigen::Vector3d p = T_map_cam * K.backProject(u, v, z);
-      cloud.push_back(static_cast<float>(p.x()), static_cast<float>(p.y()),
-                      static_cast<float>(p.z()));
+      points.push_back(T_map_cam * K.backProject(s * i, s * j, z));
+      casts.push_back(i % f == 0 && j % f == 0);
     }
   }
-  const Eigen::Vector3d o = T_map_cam.translation();
-  impl_->tree.insertPointCloud(
-      cloud,
-      octomap::point3d(static_cast<float>(o.x()), static_cast<float>(o.y()),
-                       static_cast<float>(o.z())),
-      config_.max_range_m, false, true);
+  castRays(T_map_cam.translation(), points, casts);
   carve(objects);
-  return static_cast<int>(cloud.size());
+  impl_->inserted_any = true;
+  impl_->T_map_last = T_map_cam;
+  impl_->passed_over = 0;
+  return static_cast<int>(points.size());
+}
+
+namespace {
+
+std::uint64_t pack(const octomap::OcTreeKey& k) {
+  return std::uint64_t(k[0]) | std::uint64_t(k[1]) << 16 | std::uint64_t(k[2]) << 32;
+}
+octomap::OcTreeKey unpack(std::uint64_t p) {
+  return octomap::OcTreeKey(static_cast<octomap::key_type>(p & 0xffff),
+                            static_cast<octomap::key_type>(p >> 16 & 0xffff),
+                            static_cast<octomap::key_type>(p >> 32 & 0xffff));
+}
+void sortUnique(std::vector<std::uint64_t>* keys) {
+  std::sort(keys->begin(), keys->end());
+  keys->erase(std::unique(keys->begin(), keys->end()), keys->end());
+}
+
+}  // namespace
+
+// octomap's discretised scan insertion (insertPointCloud with discretize: each endpoint voxel
+// once, rays cast to the voxels' centres, free voxels that are also endpoints left occupied,
+// rays longer than max_range_m cut there with no endpoint), with the keys gathered in sorted
+// arrays rather than octomap's hash sets (one allocation a key), and the free space cast from
+// the `casts` points' voxels only: the endpoints stay dense where the rays, converging on the
+// camera, need not be.
+void BackgroundMap::castRays(const Eigen::Vector3d& origin,
+                             const std::vector<Eigen::Vector3d>& points,
+                             const std::vector<char>& casts) {
+  octomap::OcTree& tree = impl_->tree;
+  const bool bbx = tree.bbxSet();
+  std::vector<std::uint64_t> occupied, rays, free;
+  occupied.reserve(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    octomap::OcTreeKey key;
+    const Eigen::Vector3d& p = points[i];
+    if (!tree.coordToKeyChecked(
+            octomap::point3d(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                             static_cast<float>(p.z())),
+            key))
+      continue;
+    if ((p - origin).norm() <= config_.max_range_m) occupied.push_back(pack(key));
+    if (casts[i]) rays.push_back(pack(key));
+  }
+  sortUnique(&occupied);
+  sortUnique(&rays);
+  const octomap::point3d o(static_cast<float>(origin.x()), static_cast<float>(origin.y()),
+                           static_cast<float>(origin.z()));
+  octomap::KeyRay ray;
+  for (std::uint64_t r : rays) {
+    octomap::point3d end = tree.keyToCoord(unpack(r));
+    const octomap::point3d dir = end - o;
+    if (dir.norm() > config_.max_range_m)
+      end = o + dir.normalized() * static_cast<float>(config_.max_range_m);
+    if (!tree.computeRayKeys(o, end, ray)) continue;
+    for (const octomap::OcTreeKey& k : ray) free.push_back(pack(k));
+  }
+  sortUnique(&free);
+  std::vector<std::uint64_t> only_free;
+  only_free.reserve(free.size());
+  std::set_difference(free.begin(), free.end(), occupied.begin(), occupied.end(),
+                      std::back_inserter(only_free));
+  for (std::uint64_t k : only_free) {
+    const octomap::OcTreeKey key = unpack(k);
+    if (!bbx || tree.inBBX(key)) tree.updateNode(key, false);
+  }
+  for (std::uint64_t k : occupied) {
+    const octomap::OcTreeKey key = unpack(k);
+    if (!bbx || tree.inBBX(key)) tree.updateNode(key, true);
+  }
 }
 
 void BackgroundMap::carve(const std::vector<MaskObject>& objects) {
@@ -177,6 +303,33 @@ std::vector<Eigen::Vector3d> BackgroundMap::occupiedCentres() const {
     if (impl_->tree.isNodeOccupied(*it)) out.emplace_back(it.getX(), it.getY(), it.getZ());
   }
   return out;
+}
+
+std::vector<Eigen::Vector3d> BackgroundMap::occupiedVoxels() const {
+  std::vector<Eigen::Vector3d> out;
+  const octomap::OcTree& tree = impl_->tree;
+  const double res = tree.getResolution();
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
+    if (!tree.isNodeOccupied(*it)) continue;
+    const double size = it.getSize();
+    const int n = std::max(1, static_cast<int>(std::lround(size / res)));
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j)
+        for (int k = 0; k < n; ++k)
+          out.emplace_back(it.getX() - 0.5 * size + (i + 0.5) * res,
+                           it.getY() - 0.5 * size + (j + 0.5) * res,
+                           it.getZ() - 0.5 * size + (k + 0.5) * res);
+  }
+  return out;
+}
+
+OccupiedAgreement compareOccupied(const BackgroundMap& a, const BackgroundMap& b) {
+  OccupiedAgreement r;
+  const std::vector<Eigen::Vector3d> va = a.occupiedVoxels(), vb = b.occupiedVoxels();
+  r.a = va.size();
+  r.b = vb.size();
+  for (const Eigen::Vector3d& p : va) r.both += b.isOccupied(p);
+  return r;
 }
 
 bool BackgroundMap::isOccupied(const Eigen::Vector3d& p) const {

@@ -494,6 +494,25 @@ class Table {
          "> 0: only the square of this half extent about the map origin (x, y; every height) is "
          "mapped (memory bounded by the region), m; 0: unbounded",
          [f](GeoFusionConfig& c) { return &f(c)->region_half_extent_m; });
+    real("background.min_translation_m", 0, 100,
+         "a keyframe is inserted when the camera moved this far since the last inserted one, m",
+         [f](GeoFusionConfig& c) { return &f(c)->min_translation_m; });
+    real("background.min_rotation_deg", 0, 360, "... or turned this far, degrees",
+         [f](GeoFusionConfig& c) { return &f(c)->min_rotation_deg; });
+    integer("background.max_interval_keyframes", 1, 100000,
+            "... or this many keyframes passed (1: every keyframe)",
+            [f](GeoFusionConfig& c) { return &f(c)->max_interval_keyframes; });
+    integer("background.free_space_stride", 1, 64,
+            "free space is cleared along the rays to every n-th sample in each direction (every "
+            "sample still marks its voxel occupied)",
+            [f](GeoFusionConfig& c) { return &f(c)->free_space_stride; });
+    integer("background.mask_mesh_triangles", 4, 1000000,
+            "object masks render each model simplified to about this many triangles",
+            [f](GeoFusionConfig& c) { return &f(c)->mask_mesh_triangles; });
+    flag("background.threaded",
+         "the node inserts keyframes in a thread of its own (a keyframe arriving while one "
+         "waits replaces it); the offline runner inserts every keyframe either way",
+         [f](GeoFusionConfig& c) { return &f(c)->threaded; });
   }
   void visualOdometry() {
     auto f = [](GeoFusionConfig& c) { return &c.visual_odometry; };
@@ -555,6 +574,12 @@ class Table {
          [](GeoFusionConfig& c) { return &c.node.publish_object_frames; });
     text("node.object_frame_prefix", "TF frame name of an object: this prefix, then its id",
          [](GeoFusionConfig& c) { return &c.node.object_frame_prefix; });
+    real("node.object_frames_rate_hz", 0, 1000,
+         "the last keyframe's object frames are sent again at this rate, Hz (0: only at keyframes)",
+         [](GeoFusionConfig& c) { return &c.node.object_frames_rate_hz; });
+    real("node.object_frames_tolerance_s", 0, 10,
+         "... stamped this far ahead of now, so a lookup at the current time succeeds, s",
+         [](GeoFusionConfig& c) { return &c.node.object_frames_tolerance_s; });
     text("node.background_colour",
          "the background's colour in rviz: a bluish grey, lighter with height, or plain grey",
          [](GeoFusionConfig& c) { return &c.node.background_colour; }, {"height", "grey"});

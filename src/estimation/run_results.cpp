@@ -266,6 +266,20 @@ bool writeRunResults(const std::string& path, const RunResults& r, std::string* 
     out << YAML::EndMap;
   }
   out << YAML::Key << "keyframes_over_budget" << YAML::Value << r.keyframes_over_budget;
+  if (r.has_background) {
+    const BackgroundStats& b = r.background;
+    out << YAML::Key << "background" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "keyframes_submitted" << YAML::Value << b.submitted;
+    out << YAML::Key << "keyframes_inserted" << YAML::Value << b.inserted;
+    out << YAML::Key << "keyframes_skipped" << YAML::Value << b.skipped;
+    out << YAML::Key << "keyframes_still" << YAML::Value << b.still;
+    out << YAML::Key << "ms_p50" << YAML::Value << b.p50_ms;
+    out << YAML::Key << "ms_p95" << YAML::Value << b.p95_ms;
+    out << YAML::Key << "ms_max" << YAML::Value << b.max_ms;
+    out << YAML::Key << "ms_total" << YAML::Value << b.total_ms;
+    out << YAML::Key << "ms_amortised" << YAML::Value << b.amortisedMs();
+    out << YAML::EndMap;
+  }
   for (const auto& [key, counts] : {std::pair{"removals_by_reason", removalsByReason(r)},
                                     std::pair{"relocalisations", relocalisationsByDecision(r)}}) {
     out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginMap;
@@ -392,6 +406,17 @@ bool readRunResults(const std::string& path, const ModelSet& models, RunResults*
         counts->emplace_back(kv.first.as<std::string>(), kv.second.as<std::size_t>());
     }
     r.keyframes_over_budget = root["keyframes_over_budget"].as<int>(0);
+    if (const YAML::Node b = root["background"]) {
+      r.has_background = true;
+      r.background.submitted = b["keyframes_submitted"].as<std::size_t>(0);
+      r.background.inserted = b["keyframes_inserted"].as<std::size_t>(0);
+      r.background.skipped = b["keyframes_skipped"].as<std::size_t>(0);
+      r.background.still = b["keyframes_still"].as<std::size_t>(0);
+      r.background.p50_ms = b["ms_p50"].as<double>(0.0);
+      r.background.p95_ms = b["ms_p95"].as<double>(0.0);
+      r.background.max_ms = b["ms_max"].as<double>(0.0);
+      r.background.total_ms = b["ms_total"].as<double>(0.0);
+    }
     for (const YAML::Node& k : root["keyframes"]) {
       KeyframeResult kr;
       kr.keyframe = k["index"].as<int>();

@@ -120,6 +120,13 @@ SceneEstimator::SceneEstimator(const ModelSet& models, const EstimatorConfig& co
 
 SceneEstimator::~SceneEstimator() = default;
 
+void SceneEstimator::prepare() {
+  for (const auto& [name, model] : models_) {
+    scorer_->prepare(model);
+    collider_->prepare(model);
+  }
+}
+
 void SceneEstimator::setConfig(const EstimatorConfig& config) {
   const Method method = config_.method;
   config_ = config;

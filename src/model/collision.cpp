@@ -61,6 +61,10 @@ struct HullCollider::Impl {
 HullCollider::HullCollider() : impl_(std::make_unique<Impl>()) {}
 HullCollider::~HullCollider() = default;
 
+void HullCollider::prepare(const std::shared_ptr<const ObjectModel>& model) {
+  if (model) impl_->hull(model);
+}
+
 namespace {
 
 // `query` (penetration or distance) of the two models' hulls at their poses; 0 for a null model.

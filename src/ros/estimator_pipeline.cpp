@@ -13,10 +13,9 @@ EstimatorPipeline::EstimatorPipeline(const ModelSet& models, const EstimatorConf
                                      const BackgroundMapConfig* background,
                                      const IngestionConfig& ingestion)
     : selector_(keyframes), checker_(checks), gate_(ingestion) {
-  // One OSMesa context for the consistency scores and the background's object masks.
-  auto renderer = std::make_shared<OffscreenRenderer>();
-  estimator_ = std::make_unique<SceneEstimator>(models, estimator, renderer);
-  if (background) background_ = std::make_unique<BackgroundMap>(*background, renderer);
+  estimator_ = std::make_unique<SceneEstimator>(models, estimator);
+  estimator_->prepare();
+  if (background) background_ = std::make_unique<BackgroundWorker>(*background, &models);
   std::set<std::string> classes;
   for (const auto& model : models.models()) classes.insert(model->name);
   checker_.setKnownClasses(std::move(classes));
@@ -57,7 +56,9 @@ bool EstimatorPipeline::saveMap(const std::string& prefix, RunResults map, MapFi
   BackgroundWriter write_background;
   if (background_) {
     write_background = [this](const std::string& path, std::string* e) {
-      return background_->writeBinary(path, e);
+      bool written = false;
+      background_->withMap([&](BackgroundMap& map) { written = map.writeBinary(path, e); });
+      return written;
     };
   }
   return geofusion::saveMap(prefix, std::move(map), write_background, files, error);
@@ -69,8 +70,12 @@ bool EstimatorPipeline::loadMap(const std::string& path, const ModelSet& models,
   MapFiles files;
   if (!geofusion::loadMap(path, models, &map, &files, error)) return false;
   reset();  // the pieces were checked to belong together
-  if (background_ && !files.background.empty() && !background_->readBinary(files.background, error))
-    return false;
+  bool read = true;
+  if (background_ && !files.background.empty()) {
+    background_->withMap(
+        [&](BackgroundMap& map) { read = map.readBinary(files.background, error); });
+  }
+  if (!read) return false;
   estimator_->resume(map.final_map.objects, map.T_map_odom);
   resumed_ = map;
   if (loaded) *loaded = std::move(map);
@@ -124,19 +129,19 @@ EstimatorPipeline::Outcome EstimatorPipeline::process(const sensor_msgs::Image& 
   return Outcome::kKeyframe;
 }
 
-// The estimator's keyframe, the background's update, and the time budget of both.
+// The estimator's keyframe, then the background's (in its own thread, or in this one), and the
+// time budget of what ran here.
 void EstimatorPipeline::runKeyframe(const Keyframe& kf, KeyframeResult* result) {
   *result = estimator_->addKeyframe(kf);
-  background_ms_ = 0.0;
+  double background_ms = 0.0;
   if (background_) {
-    const auto start = std::chrono::steady_clock::now();
     std::vector<MaskObject> objects;
     for (const ObjectEstimate& o : result->objects) objects.push_back({o.model, o.T_map_obj});
-    background_->insert(kf.depth, kf.K, result->T_map_cam, objects);
-    background_ms_ =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    background_->submit(kf.depth, kf.K, result->T_map_cam, std::move(objects), kf.stamp_s);
+    if (!background_->config().threaded) background_ms = background_->stats().last_ms;
   }
-  last_overran_ = result->timings.total_ms + background_ms_ > gate_.config().keyframe_budget_ms;
+  last_keyframe_ms_ = result->timings.total_ms + background_ms;
+  last_overran_ = last_keyframe_ms_ > gate_.config().keyframe_budget_ms;
   budget_overruns_ += last_overran_;
 }
 

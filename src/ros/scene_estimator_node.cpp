@@ -46,6 +46,8 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   tf_timeout_s_ = config_.input.tf_timeout_s;
   warn_period_s_ = config_.input.warn_period_s;
   background_publish_every_ = config_.node.background_publish_every;
+  background_by_height_ = config_.node.background_colour == "height";
+  object_frames_tolerance_s_ = config_.node.object_frames_tolerance_s;
   method_name_ = toString(config_.estimator.method);
 
   models_ = loadNodeModelSet(config_);
@@ -64,6 +66,21 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   // Built against octomap_msgs: the tree itself, for octomap_rviz_plugins and OctoMap tools.
   background_octomap_pub_ = pnh_.advertise<octomap_msgs::Octomap>("background_octomap", 1, true);
 #endif
+  if (BackgroundWorker* background = pipeline_->background()) {
+    // Published by the background's thread, every N-th insertion from the first.
+    background->setListener([this](const BackgroundMap& map, double stamp_s, std::size_t n) {
+      if ((n - 1) % static_cast<std::size_t>(background_publish_every_) != 0) return;
+      std_msgs::Header header;
+      header.stamp = ros::Time(stamp_s);
+      header.frame_id = map_frame_;
+      publishBackground(map, header);
+    });
+  }
+  if (config_.node.publish_object_frames && config_.node.object_frames_rate_hz > 0) {
+    object_frames_timer_ =
+        nh_.createTimer(ros::Duration(1.0 / config_.node.object_frames_rate_hz),
+                        [this](const ros::TimerEvent&) { republishObjectFrames(); });
+  }
   save_srv_ = pnh_.advertiseService("save_map", &SceneEstimatorNode::onSave, this);
   load_srv_ = pnh_.advertiseService("load_map", &SceneEstimatorNode::onLoad, this);
   reset_srv_ = pnh_.advertiseService("reset", &SceneEstimatorNode::onReset, this);
@@ -129,6 +146,9 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
 
 SceneEstimatorNode::~SceneEstimatorNode() {
   subscriber_.reset();
+  object_frames_timer_.stop();
+  // No background publication in flight once this returns (the listener runs under its lock).
+  if (pipeline_ && pipeline_->background()) pipeline_->background()->setListener(nullptr);
   if (odom_spinner_) odom_spinner_->stop();
   odom_sub_.shutdown();
   tf_sub_.shutdown();
@@ -171,8 +191,7 @@ void SceneEstimatorNode::onFrame(const sensor_msgs::ImageConstPtr& /*rgb*/,
     if (pipeline_->lastKeyframeOverran())
       ROS_WARN_STREAM_THROTTLE(warn_period_s_,
                                "geofusion: keyframe "
-                                   << result.keyframe << " took "
-                                   << result.timings.total_ms + pipeline_->lastBackgroundMs()
+                                   << result.keyframe << " took " << pipeline_->lastKeyframeMs()
                                    << " ms, over input.keyframe_budget_ms ("
                                    << pipeline_->ingestionConfig().keyframe_budget_ms << "; "
                                    << pipeline_->budgetOverruns() << " overruns so far)");
@@ -313,28 +332,19 @@ void SceneEstimatorNode::publish(const KeyframeResult& result, const std_msgs::H
   path_pub_.publish(path);
   broadcastCorrection(header.stamp);
   broadcastObjects(result, header);
-  // Every N-th keyframe from the first, and on a reset (an empty map).
-  if ((keyframes_ - 1) % static_cast<std::size_t>(background_publish_every_) == 0 ||
-      result.objects.empty()) {
-    publishBackground(header);
-  }
 }
 
-void SceneEstimatorNode::publishBackground(const std_msgs::Header& header) {
-  std::vector<Eigen::Vector3d> centres;
-  double resolution = 0.0;
+// Called with the background's map locked, on the background's thread after an insertion (or
+// on a reset): never takes mutex_, so the estimator's thread never waits for it.
+void SceneEstimatorNode::publishBackground(const BackgroundMap& map,
+                                           const std_msgs::Header& header) {
+  const std::vector<Eigen::Vector3d> centres = map.occupiedCentres();
+  const double resolution = map.config().resolution_m;
   std::string octree;  // binary serialisation, only with octomap_msgs
-  bool by_height = true;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (!pipeline_->background()) return;
-    by_height = config_.node.background_colour == "height";
-    centres = pipeline_->background()->occupiedCentres();
-    resolution = pipeline_->background()->config().resolution_m;
-    if (background_octomap_pub_ && background_octomap_pub_.getNumSubscribers() > 0)
-      octree = pipeline_->background()->binaryData();
-  }
-  background_markers_pub_.publish(backgroundMarkers(centres, resolution, header, by_height));
+  if (background_octomap_pub_ && background_octomap_pub_.getNumSubscribers() > 0)
+    octree = map.binaryData();
+  background_markers_pub_.publish(
+      backgroundMarkers(centres, resolution, header, background_by_height_.load()));
   background_cloud_pub_.publish(pointCloud(centres, header));
 #ifdef GEOFUSION_HAVE_OCTOMAP_MSGS
   if (!octree.empty()) {
@@ -367,7 +377,7 @@ void SceneEstimatorNode::broadcastCorrection(const ros::Time& stamp) {
 // objects); removed objects are no longer sent, so their frames age out of TF buffers.
 void SceneEstimatorNode::broadcastObjects(const KeyframeResult& result,
                                           const std_msgs::Header& header) {
-  if (!config_.node.publish_object_frames || result.objects.empty()) return;
+  if (!config_.node.publish_object_frames) return;
   std::vector<geometry_msgs::TransformStamped> frames;
   for (const ObjectEstimate& o : result.objects) {
     geometry_msgs::TransformStamped t = tf2::eigenToTransform(o.T_map_obj);
@@ -375,6 +385,25 @@ void SceneEstimatorNode::broadcastObjects(const KeyframeResult& result,
     t.child_frame_id = config_.node.object_frame_prefix + std::to_string(messageId(o.id));
     frames.push_back(t);
   }
+  {
+    std::lock_guard<std::mutex> lock(object_frames_mutex_);
+    object_frames_ = frames;
+  }
+  if (!frames.empty()) tf_broadcaster_.sendTransform(frames);
+}
+
+// The last keyframe's object frames again, stamped ahead of now by node.object_frames_tolerance_s
+// (as amcl's transform_tolerance post-dates map -> odom): a lookup at ros::Time::now() works
+// between keyframes; a removed object's frame stops with the keyframe that removed it.
+void SceneEstimatorNode::republishObjectFrames() {
+  std::vector<geometry_msgs::TransformStamped> frames;
+  {
+    std::lock_guard<std::mutex> lock(object_frames_mutex_);
+    frames = object_frames_;
+  }
+  if (frames.empty()) return;
+  const ros::Time stamp = ros::Time::now() + ros::Duration(object_frames_tolerance_s_);
+  for (auto& t : frames) t.header.stamp = stamp;
   tf_broadcaster_.sendTransform(frames);
 }
 
@@ -458,7 +487,15 @@ void SceneEstimatorNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   status.add("last keyframe ms: relations", t.relations_ms);
   status.add("last keyframe ms: stage II", t.stage_two_ms);
   status.add("last keyframe ms: total", t.total_ms);
-  status.add("last keyframe ms: background", pipeline_->lastBackgroundMs());
+  if (BackgroundWorker* background = pipeline_->background()) {
+    const BackgroundStats b = background->stats();
+    status.add("background ms: last insertion", b.last_ms);
+    status.add("background ms: p95 insertion", b.p95_ms);
+    status.add("background ms: a keyframe (amortised)", b.amortisedMs());
+    status.add("background keyframes inserted", b.inserted);
+    status.add("background keyframes skipped (busy)", b.skipped);
+    status.add("background keyframes passed over (camera still)", b.still);
+  }
 }
 
 void SceneEstimatorNode::onReconfigure(geofusion::SceneEstimatorConfig& values, uint32_t) {
@@ -472,6 +509,7 @@ void SceneEstimatorNode::onReconfigure(geofusion::SceneEstimatorConfig& values, 
   const std::string diff = configDiff(changed);
   const bool any_change = diff != configDiff(config_);
   config_ = changed;
+  background_by_height_ = config_.node.background_colour == "height";
   pipeline_->estimator().setConfig(config_.estimator);
   tf_timeout_s_ = config_.input.tf_timeout_s;
   publishEffectiveConfig(pnh_, config_);
@@ -613,6 +651,8 @@ bool SceneEstimatorNode::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger:
   header.stamp = ros::Time::now();
   header.frame_id = map_frame_;
   publish(KeyframeResult(), header);
+  if (BackgroundWorker* background = pipeline_->background())  // the emptied background
+    background->withMap([&](const BackgroundMap& map) { publishBackground(map, header); });
   return true;
 }
 

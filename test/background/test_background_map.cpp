@@ -1,15 +1,21 @@
 // The background OctoMap: depth minus the map's objects, ray cast from the camera.
 #include "geofusion/background/background_map.h"
+#include "geofusion/background/background_worker.h"
 #include "geofusion/render/renderer.h"
 #include "test_geometry.h"
 
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <string>
+#include <thread>
+#include <tuple>
 
 namespace geofusion {
 namespace {
@@ -137,6 +143,141 @@ TEST(BackgroundMap, TableInObjectsOut) {
   }
   // Bad input inserts nothing.
   EXPECT_EQ(masked.insert(DepthImageView{}, scene.K, scene.cameras[0], {}), 0);
+}
+
+std::set<std::tuple<long, long, long>> voxels(const std::vector<Eigen::Vector3d>& centres) {
+  std::set<std::tuple<long, long, long>> out;
+  for (const Eigen::Vector3d& p : centres)
+    out.emplace(std::lround(p.x() * 1000), std::lround(p.y() * 1000), std::lround(p.z() * 1000));
+  return out;
+}
+
+// Issue 33: the worker (own thread, own renderer) builds the map the estimator's thread would,
+// keyframe by keyframe when asked to wait; its listener runs on its thread after each insertion.
+TEST(BackgroundWorker, ThreadedAndWaitingIsTheSameMap) {
+  TableWithBox scene;
+  ASSERT_TRUE(scene.renderer->ok());
+  BackgroundMap direct(BackgroundMapConfig(), scene.renderer);
+  BackgroundWorker worker(BackgroundMapConfig{});  // threaded by default
+  worker.setWait(true);
+  std::vector<std::size_t> heard;
+  std::thread::id listener_thread;
+  worker.setListener([&](const BackgroundMap& map, double stamp, std::size_t n) {
+    EXPECT_DOUBLE_EQ(stamp, static_cast<double>(n));
+    heard.push_back(map.numLeaves() > 0 ? n : 0);
+    listener_thread = std::this_thread::get_id();
+  });
+  for (std::size_t k = 0; k < scene.frames.size(); ++k) {
+    const DepthImageView depth{scene.frames[k].depth.data(), scene.K.width, scene.K.height};
+    direct.insert(depth, scene.K, scene.cameras[k], {{scene.box, scene.T_box}});
+    worker.submit(depth, scene.K, scene.cameras[k], {{scene.box, scene.T_box}},
+                  static_cast<double>(k + 1));
+  }
+  EXPECT_EQ(heard, (std::vector<std::size_t>{1, 2, 3}));
+  EXPECT_NE(listener_thread, std::this_thread::get_id());
+  std::vector<Eigen::Vector3d> centres;
+  worker.withMap([&](BackgroundMap& map) { centres = map.occupiedCentres(); });
+  EXPECT_GT(centres.size(), 100u);
+  EXPECT_EQ(voxels(centres), voxels(direct.occupiedCentres()));
+  const BackgroundStats stats = worker.stats();
+  EXPECT_EQ(stats.submitted, 3u);
+  EXPECT_EQ(stats.inserted, 3u);
+  EXPECT_EQ(stats.skipped, 0u);
+  EXPECT_GT(stats.total_ms, 0.0);
+  EXPECT_NEAR(stats.amortisedMs(), stats.total_ms / 3, 1e-9);
+  EXPECT_LE(stats.p50_ms, stats.max_ms);
+}
+
+// Keyframes handed over faster than they are inserted: the one waiting is replaced by the newer
+// one, counted; nothing is lost uncounted and the newest always goes in.
+TEST(BackgroundWorker, ANewerKeyframeReplacesTheOneWaiting) {
+  TableWithBox scene;
+  ASSERT_TRUE(scene.renderer->ok());
+  BackgroundMapConfig config;
+  config.max_interval_keyframes = 1;  // every keyframe wanted: only the replacement at work
+  BackgroundWorker worker(config);
+  std::vector<double> stamps;
+  worker.setListener([&](const BackgroundMap&, double stamp, std::size_t) {
+    stamps.push_back(stamp);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));  // a slow insertion
+  });
+  const int n = 30;
+  for (int k = 0; k < n; ++k) {
+    const std::size_t f = static_cast<std::size_t>(k) % scene.frames.size();
+    const DepthImageView depth{scene.frames[f].depth.data(), scene.K.width, scene.K.height};
+    worker.submit(depth, scene.K, scene.cameras[f], {}, k);
+  }
+  worker.waitIdle();
+  const BackgroundStats stats = worker.stats();
+  EXPECT_EQ(stats.submitted, static_cast<std::size_t>(n));
+  EXPECT_EQ(stats.inserted + stats.skipped, stats.submitted);
+  EXPECT_EQ(stats.still, 0u);
+  EXPECT_GT(stats.skipped, 0u);
+  ASSERT_FALSE(stamps.empty());
+  EXPECT_DOUBLE_EQ(stamps.back(), n - 1.0);
+  EXPECT_TRUE(std::is_sorted(stamps.begin(), stamps.end()));
+  // Cleared: no map, counts from zero.
+  worker.clear();
+  EXPECT_EQ(worker.stats().submitted, 0u);
+  std::size_t leaves = 1;
+  worker.withMap([&](BackgroundMap& map) { leaves = map.numLeaves(); });
+  EXPECT_EQ(leaves, 0u);
+}
+
+// A camera that hardly moves adds little: its keyframes are passed over (counted), except every
+// max_interval_keyframes-th; a move or a turn past the thresholds is inserted at once.
+TEST(BackgroundMap, AStillCameraIsPassedOver) {
+  BackgroundMapConfig config;
+  config.min_translation_m = 0.03;
+  config.min_rotation_deg = 3.0;
+  config.max_interval_keyframes = 4;
+  TableWithBox scene;
+  BackgroundMap map(config, scene.renderer);
+  const Eigen::Isometry3d T = scene.cameras[1];
+  const DepthImageView depth{scene.frames[1].depth.data(), scene.K.width, scene.K.height};
+  EXPECT_TRUE(map.wanted(T));  // nothing inserted yet
+  map.insert(depth, scene.K, T, {});
+  Eigen::Isometry3d nudged = T;
+  nudged.translation().x() += 0.02;
+  EXPECT_FALSE(map.wanted(nudged));
+  EXPECT_FALSE(map.wanted(T));
+  EXPECT_FALSE(map.wanted(T));
+  EXPECT_TRUE(map.wanted(T));  // the 4th keyframe since the last insertion
+  map.insert(depth, scene.K, T, {});
+  Eigen::Isometry3d moved = T;
+  moved.translation().y() += 0.035;
+  EXPECT_TRUE(map.wanted(moved));
+  const Eigen::Isometry3d turned =
+      T * Eigen::AngleAxisd(4.0 * M_PI / 180, Eigen::Vector3d::UnitY());
+  EXPECT_TRUE(map.wanted(turned));
+  const Eigen::Isometry3d barely =
+      T * Eigen::AngleAxisd(2.0 * M_PI / 180, Eigen::Vector3d::UnitY());
+  EXPECT_FALSE(map.wanted(barely));
+  map.clear();
+  EXPECT_TRUE(map.wanted(T));  // an empty map wants anything
+  // The worker counts them.
+  BackgroundWorker worker(config);
+  worker.setWait(true);
+  for (int k = 0; k < 8; ++k) worker.submit(depth, scene.K, T, {}, k);
+  const BackgroundStats stats = worker.stats();
+  EXPECT_EQ(stats.inserted, 2u);  // the first and the 4th after it
+  EXPECT_EQ(stats.still, 6u);
+  EXPECT_EQ(stats.skipped, 0u);
+}
+
+// Unthreaded, every keyframe is inserted before submit returns.
+TEST(BackgroundWorker, UnthreadedInsertsAtOnce) {
+  TableWithBox scene;
+  BackgroundMapConfig config;
+  config.threaded = false;
+  BackgroundWorker worker(config);
+  const DepthImageView depth{scene.frames[0].depth.data(), scene.K.width, scene.K.height};
+  worker.submit(depth, scene.K, scene.cameras[0], {}, 0.0);
+  EXPECT_EQ(worker.stats().inserted, 1u);
+  bool occupied = false;
+  worker.withMap(
+      [&](BackgroundMap& map) { occupied = map.isOccupied(Eigen::Vector3d(0.2, 0.2, 0.745)); });
+  EXPECT_TRUE(occupied);
 }
 
 }  // namespace

@@ -155,6 +155,11 @@ class EstimatorReplayTest(unittest.TestCase):
             self.assertAlmostEqual(t.transform.translation.x, p.x, places=6)
             self.assertAlmostEqual(t.transform.translation.y, p.y, places=6)
             self.assertAlmostEqual(t.transform.translation.z, p.z, places=6)
+            # Issue 33: re-sent between keyframes stamped ahead of now, so robot code can look
+            # an object up at the current time (the clock stopped with the bag; no waiting).
+            now = rospy.Time.now()
+            self.assertTrue(self.tf_buffer.can_transform('map', 'object_%d' % o.id, now),
+                            'object_%d cannot be looked up at now() (%s)' % (o.id, now))
         # Diagnostics: running, with the keyframe count and the stage times.
         mine = [d for d in self.diagnostics if 'scene estimator' in d.name]
         self.assertTrue(mine, 'no diagnostics from the estimator')
@@ -167,6 +172,14 @@ class EstimatorReplayTest(unittest.TestCase):
         values = {kv.key: kv.value for kv in last.values}
         self.assertGreaterEqual(int(values['keyframes']), KEYFRAMES - 1)
         self.assertIn('last keyframe ms: stage II', values)
+        # The background's own thread: every keyframe handed over is inserted, passed over
+        # (camera still) or replaced while waiting (counted), and its time is reported.
+        handed = int(values['background keyframes inserted']) + \
+            int(values['background keyframes passed over (camera still)']) + \
+            int(values['background keyframes skipped (busy)'])
+        self.assertGreaterEqual(handed, KEYFRAMES - 1)
+        self.assertGreater(int(values['background keyframes inserted']), 0)
+        self.assertGreater(float(values['background ms: a keyframe (amortised)']), 0.0)
         # Every removal and every refused relocalisation counted by its reason (issue 32).
         for reason in ('candidate_timeout', 'seen_absent', 'merged'):
             self.assertGreaterEqual(int(values['objects removed: ' + reason]), 0)

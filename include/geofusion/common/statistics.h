@@ -1,4 +1,5 @@
-// Small statistics: what the benchmarks and tools print, the medians the estimator takes.
+// Small statistics: what the benchmarks and tools print, the medians the estimator takes, the
+// background map's cost (BackgroundWorker measures it, the results file records it).
 #pragma once
 
 #include <algorithm>
@@ -14,5 +15,18 @@ inline double percentile(std::vector<double> values, double p) {
   const double rank = std::clamp(p, 0.0, 1.0) * static_cast<double>(values.size() - 1);
   return values[static_cast<std::size_t>(rank + 0.5)];
 }
+
+/// What the background's insertions have cost so far.
+struct BackgroundStats {
+  std::size_t submitted = 0;  ///< keyframes handed over
+  std::size_t inserted = 0;   ///< ... inserted
+  std::size_t skipped = 0;    ///< ... replaced by a newer one before their turn (threaded only)
+  std::size_t still = 0;      ///< ... passed over: the camera had hardly moved (wanted())
+  double last_ms = 0.0;       ///< the last insertion's time (its thread's CPU time)
+  double total_ms = 0.0;      ///< every insertion's CPU time summed (the checks' included)
+  double p50_ms = 0.0, p95_ms = 0.0, max_ms = 0.0;  ///< over the insertions
+  /// total_ms over the keyframes submitted: the background's cost a keyframe on one core.
+  double amortisedMs() const { return submitted ? total_ms / submitted : 0.0; }
+};
 
 }  // namespace geofusion

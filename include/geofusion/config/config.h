@@ -42,6 +42,11 @@ struct NodeConfig {
   /// every keyframe; a removed object's frame is no longer sent.
   bool publish_object_frames = true;
   std::string object_frame_prefix = "object_";
+  /// The last keyframe's object frames are sent again at this rate (0: only at keyframes),
+  /// stamped object_frames_tolerance_s ahead of the current time (as amcl's transform_tolerance),
+  /// so that robot code can look them up at ros::Time::now().
+  double object_frames_rate_hz = 10.0;
+  double object_frames_tolerance_s = 0.2;
   /// The background's colour in rviz: "height" (a bluish grey, lighter with height) or "grey".
   std::string background_colour = "height";
 };

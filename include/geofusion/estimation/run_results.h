@@ -4,6 +4,7 @@
 // benchmark's evaluator.
 #pragma once
 
+#include "geofusion/common/statistics.h"
 #include "geofusion/estimation/scene_estimator.h"
 
 #include <cstdint>
@@ -26,6 +27,10 @@ struct RunResults {
   /// Inputs not used, by reason (FrameDrop's and SkipReason's words): frames and detections.
   std::vector<std::pair<std::string, std::size_t>> frames_dropped, detections_dropped;
   int keyframes_over_budget = 0;  ///< keyframes longer than input.keyframe_budget_ms
+  /// The background map's insertions and their CPU time (`background` in the file; absent when
+  /// the run made no background).
+  bool has_background = false;
+  BackgroundStats background;
   std::vector<KeyframeResult> keyframes;
   KeyframeResult final_map;    ///< after SceneEstimator::finish()
   SupportPlane support_plane;  ///< the estimator's table plane (map frame), when it found one

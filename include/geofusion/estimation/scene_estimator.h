@@ -219,6 +219,9 @@ class SceneEstimator {
                  std::shared_ptr<OffscreenRenderer> renderer = nullptr);
   ~SceneEstimator();
 
+  /// Prepares every model now (the scoring meshes uploaded, the collision hulls built) rather
+  /// than at its first detection: a live start without a first keyframe seconds over budget.
+  void prepare();
   KeyframeResult addKeyframe(const Keyframe& keyframe);
   /// Continues a saved map (map_store.h) before the first keyframe: its objects become
   /// confirmed objects at their saved poses with their measurement counts and consistency (new

@@ -27,6 +27,8 @@ class HullCollider {
                      const Eigen::Isometry3d& T_world_a,
                      const std::shared_ptr<const ObjectModel>& b,
                      const Eigen::Isometry3d& T_world_b);
+  /// Builds the model's FCL hull now (at start, not at the first contact check).
+  void prepare(const std::shared_ptr<const ObjectModel>& model);
   /// Distance between the two hulls, 0 when they touch or intersect.
   double distance(const std::shared_ptr<const ObjectModel>& a, const Eigen::Isometry3d& T_world_a,
                   const std::shared_ptr<const ObjectModel>& b, const Eigen::Isometry3d& T_world_b);

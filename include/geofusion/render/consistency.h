@@ -115,6 +115,9 @@ class ConsistencyScorer {
   void setConfig(const ConsistencyConfig& config) { config_ = config; }
   OffscreenRenderer& renderer() { return *renderer_; }
 
+  /// Uploads the model's scoring mesh now (ModelSet's models at start: no first-use stall).
+  void prepare(const std::shared_ptr<const ObjectModel>& model) { handleFor(model); }
+
  private:
   MeshHandle handleFor(const std::shared_ptr<const ObjectModel>& model);
 

@@ -5,7 +5,7 @@
 // decision; only their I/O (subscribers and TF, or a bag) differs.
 #pragma once
 
-#include "geofusion/background/background_map.h"
+#include "geofusion/background/background_worker.h"
 #include "geofusion/common/ingestion.h"
 #include "geofusion/estimation/frame_by_frame.h"
 #include "geofusion/estimation/keyframe_selector.h"
@@ -34,7 +34,8 @@ class EstimatorPipeline {
   };
 
   /// `background` non-null: every keyframe's depth, minus the map's objects, also goes into a
-  /// background OctoMap.
+  /// background OctoMap, in a thread of its own when background->threaded (BackgroundWorker).
+  /// Every model's render meshes are uploaded here, so the first keyframe does not wait.
   EstimatorPipeline(const ModelSet& models, const EstimatorConfig& estimator,
                     const KeyframeSelectorConfig& keyframes,
                     const FrameByFrame::Config& checks = FrameByFrame::Config(),
@@ -63,18 +64,20 @@ class EstimatorPipeline {
   /// Frames given to process(), and those dropped by reason.
   std::size_t framesSeen() const { return frames_seen_; }
   const FrameDropCounts& drops() const { return drops_; }
-  /// Keyframes over the time budget (input.keyframe_budget_ms), and whether the last one was.
+  /// Keyframes over the time budget (input.keyframe_budget_ms: the estimator's time, and the
+  /// background's when it runs in the estimator's thread), and whether the last one was.
   std::size_t budgetOverruns() const { return budget_overruns_; }
   bool lastKeyframeOverran() const { return last_overran_; }
+  /// The last keyframe's time in the caller's thread (what the budget is compared with).
+  double lastKeyframeMs() const { return last_keyframe_ms_; }
   /// Detections the cap dropped in the last frame (input.max_detections_per_frame).
   std::size_t lastCapped() const { return last_capped_; }
   const IngestionConfig& ingestionConfig() const { return gate_.config(); }
 
   SceneEstimator& estimator() { return *estimator_; }
   const SceneEstimator& estimator() const { return *estimator_; }
-  /// The background map, or null when the pipeline has none.
-  BackgroundMap* background() { return background_.get(); }
-  double lastBackgroundMs() const { return background_ms_; }
+  /// The background map's worker, or null when the pipeline has none.
+  BackgroundWorker* background() { return background_.get(); }
   const DetectionTally& tally() const { return tally_; }  ///< detections used and skipped
   void reset();
 
@@ -92,8 +95,7 @@ class EstimatorPipeline {
 
  private:
   std::unique_ptr<SceneEstimator> estimator_;
-  std::unique_ptr<BackgroundMap> background_;
-  double background_ms_ = 0.0;
+  std::unique_ptr<BackgroundWorker> background_;
   Outcome drop(FrameDrop reason);
   void runKeyframe(const Keyframe& kf, KeyframeResult* result);
 
@@ -107,6 +109,7 @@ class EstimatorPipeline {
   std::string last_pose_error_;
   std::size_t frames_seen_ = 0, budget_overruns_ = 0, last_capped_ = 0;
   bool last_overran_ = false;
+  double last_keyframe_ms_ = 0.0;
   RunResults resumed_;  ///< the map loadMap() resumed, until the first keyframe after it
   std::vector<float> depth_;
 };

@@ -51,7 +51,8 @@ class SceneEstimatorNode {
   void publish(const KeyframeResult& result, const std_msgs::Header& header);
   void broadcastCorrection(const ros::Time& stamp);
   void broadcastObjects(const KeyframeResult& result, const std_msgs::Header& header);
-  void publishBackground(const std_msgs::Header& header);
+  void publishBackground(const BackgroundMap& map, const std_msgs::Header& header);
+  void republishObjectFrames();
   bool onSave(geofusion::SaveMap::Request& req, geofusion::SaveMap::Response& res);
   bool onReset(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   void onReconfigure(geofusion::SceneEstimatorConfig& config, uint32_t level);
@@ -86,6 +87,13 @@ class SceneEstimatorNode {
   ros::Publisher map_pub_, markers_pub_, path_pub_, background_markers_pub_, background_cloud_pub_;
   ros::Publisher background_octomap_pub_;  // advertised only when built with octomap_msgs
   int background_publish_every_ = 5;
+  std::atomic<bool> background_by_height_{true};  // node.background_colour, set by reconfigure
+  // The object frames of the last keyframe, re-sent at node.object_frames_rate_hz stamped
+  // node.object_frames_tolerance_s ahead of now, so a lookup at the current time succeeds.
+  std::mutex object_frames_mutex_;
+  std::vector<geometry_msgs::TransformStamped> object_frames_;
+  ros::Timer object_frames_timer_;
+  double object_frames_tolerance_s_ = 0.2;
   ros::ServiceServer save_srv_, load_srv_, reset_srv_;
   diagnostic_updater::Updater diagnostics_;
   ros::WallTimer diagnostics_timer_;
