@@ -143,7 +143,12 @@ class EstimatorReplayTest(unittest.TestCase):
         self.assertGreater(len(points), 500)
         table = gt['table']['height']
         on_table = [p for p in points if abs(p[2] - table) < 0.03]
-        self.assertGreater(len(on_table), 0.3 * len(points), 'the table is not in the background')
+        # At least half of the table top's 2 cm cells (the objects hide some; the floor around
+        # the table, seen more as the robot goes round, is in it too).
+        size = gt['table']['size']
+        self.assertGreater(len(on_table), 0.5 * size[0] * size[1] / 0.02 ** 2,
+                           'the table is not in the background (%d of %d voxels at its height)'
+                           % (len(on_table), len(points)))
         for o in final.objects:
             inside = [p for p in points if inside_box(o, p)]
             self.assertFalse(inside, 'background voxels inside %s' % o.class_name)
