@@ -98,6 +98,8 @@ def main():
     ap.add_argument('--out', required=True)
     ap.add_argument('--camera-info-topic', default='/head_camera/rgb/camera_info')
     ap.add_argument('--map-topic', default='/scene_estimator/object_map')
+    ap.add_argument('--delay', type=float, default=10.0,
+                    help='seconds between the launch and the first message')
     ap.add_argument('--port', type=int, default=11471, help="the run's own ROS master")
     a = ap.parse_args()
     os.environ['ROS_MASTER_URI'] = 'http://localhost:%d' % a.port
@@ -107,13 +109,15 @@ def main():
         busy = subprocess.Popen([sys.executable, '-c', 'while True: pass'])
     launch = subprocess.Popen(
         ['roslaunch', '--skip-log-check', '-p', str(a.port), 'geofusion', 'replay.launch', 'bag:=' + a.bag,
-         'rate:=%g' % a.rate, 'odometry:=' + a.odometry, 'stop_at_end:=false'] + a.launch_arg,
+         'rate:=%g' % a.rate, 'odometry:=' + a.odometry, 'stop_at_end:=false',
+         # A robot's estimator is up before its data: every model set loads well within this.
+         'delay:=%g' % a.delay] + a.launch_arg,
         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True)
     rec = Recorder('object_')
     result = {'bag': a.bag, 'rate': a.rate, 'load': a.load, 'odometry': a.odometry,
               'launch_args': a.launch_arg}
     try:
-        # The player waits 2 s (-d 2) before the first message: subscribe before it starts.
+        # The player waits --delay s before the first message: subscribe before it starts.
         time.sleep(1.0)
         rospy.init_node('live_bench', anonymous=True, disable_signals=True)
         rospy.Subscriber(a.camera_info_topic, CameraInfo, rec.on_info, queue_size=1000)

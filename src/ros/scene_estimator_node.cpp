@@ -132,10 +132,12 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   }
 
   const RgbdSubscriber::Config sub = RgbdSubscriber::configOf(pnh_, config_.input);
+  queue_capacity_ = static_cast<std::size_t>(std::max(1, config_.input.frame_queue_size));
+  frame_thread_ = std::thread([this] { processFrames(); });
   subscriber_ = std::make_unique<RgbdSubscriber>(
       nh_, sub,
-      [this](const auto& rgb, const auto& depth, const auto& info, const auto& dets) {
-        onFrame(rgb, depth, info, dets);
+      [this](const auto& /*rgb*/, const auto& depth, const auto& info, const auto& dets) {
+        enqueueFrame({depth, info, dets});
       },
       [this](const ros::Time& from, const ros::Time& to) { onTimeJump(from, to); });
   ROS_INFO_STREAM("geofusion: scene estimator (" << method_name_ << ", " << models.size()
@@ -146,6 +148,12 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
 
 SceneEstimatorNode::~SceneEstimatorNode() {
   subscriber_.reset();
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    stop_frames_ = true;
+  }
+  queue_cv_.notify_all();
+  if (frame_thread_.joinable()) frame_thread_.join();
   object_frames_timer_.stop();
   // No background publication in flight once this returns (the listener runs under its lock).
   if (pipeline_ && pipeline_->background()) pipeline_->background()->setListener(nullptr);
@@ -160,6 +168,49 @@ SceneEstimatorNode::~SceneEstimatorNode() {
   }
 }
 
+// The subscriber's callback hands the set over and returns: a slow keyframe never backs up
+// roscpp's queues (whose overflows nobody would count). When frames come faster than they are
+// processed, the oldest waiting one goes, counted as a queue overflow.
+void SceneEstimatorNode::enqueueFrame(FrameSet frame) {
+  ++frames_;
+  bool overflow = false;
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    queue_.push_back(std::move(frame));
+    if (queue_.size() > queue_capacity_) {
+      queue_.pop_front();
+      overflow = true;
+    }
+  }
+  queue_cv_.notify_one();
+  if (overflow) {
+    ++overflowed_;
+    ROS_WARN_STREAM_THROTTLE(warn_period_s_,
+                             "geofusion: frames come faster than the estimator takes them: the "
+                             "oldest waiting frame is dropped (input.frame_queue_size "
+                                 << queue_capacity_ << ")");
+  }
+}
+
+void SceneEstimatorNode::processFrames() {
+  for (;;) {
+    FrameSet frame;
+    {
+      std::unique_lock<std::mutex> lock(queue_mutex_);
+      queue_cv_.wait(lock, [this] { return stop_frames_ || !queue_.empty(); });
+      if (stop_frames_) return;
+      frame = std::move(queue_.front());
+      queue_.pop_front();
+    }
+    onFrame(nullptr, frame.depth, frame.info, frame.dets);
+  }
+}
+
+void SceneEstimatorNode::takeOverflows() {
+  if (const std::size_t n = overflowed_.exchange(0))
+    pipeline_->countDropped(FrameDrop::kQueueOverflow, n);
+}
+
 void SceneEstimatorNode::onFrame(const sensor_msgs::ImageConstPtr& /*rgb*/,
                                  const sensor_msgs::ImageConstPtr& depth,
                                  const sensor_msgs::CameraInfoConstPtr& info,
@@ -168,7 +219,7 @@ void SceneEstimatorNode::onFrame(const sensor_msgs::ImageConstPtr& /*rgb*/,
   KeyframeResult result;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    ++frames_;
+    takeOverflows();
     const auto outcome =
         pipeline_->process(*depth, *info, *dets, pose, subscriber_->newestStamp(), &result);
     if (outcome == EstimatorPipeline::Outcome::kDropped) {
@@ -409,6 +460,7 @@ void SceneEstimatorNode::republishObjectFrames() {
 
 void SceneEstimatorNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   std::lock_guard<std::mutex> lock(mutex_);
+  takeOverflows();
   const StageTimings& t = last_.timings;
   if (frames_ == 0) {
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no synchronised input yet");
@@ -439,7 +491,7 @@ void SceneEstimatorNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   status.add("detections (last keyframe)", last_.detections.size());
   status.add("depth-refined (last keyframe)", refined);
   status.add("inconsistent with depth (last keyframe)", rejected);
-  status.add("synchronised frames", frames_);
+  status.add("synchronised frames", frames_.load());
   if (subscriber_) {
     // Input rates over the last diagnostics period; messages that never made a synchronised set
     // (the most frequent input's count minus the sets) are the synchroniser's drops.
@@ -564,7 +616,13 @@ void SceneEstimatorNode::onTimeJump(const ros::Time& from, const ros::Time& to) 
   ROS_WARN_STREAM("geofusion: time jumped back from " << from << " to " << to
                                                       << " (a looping bag or restarted driver): "
                                                          "the map is reset");
+  {
+    // Frames from before the jump would look newer than everything after it.
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    queue_.clear();
+  }
   std::lock_guard<std::mutex> lock(mutex_);
+  overflowed_ = 0;
   pipeline_->reset();
   tf_buffer_.clear();
   odom_buffer_.clear();
@@ -574,6 +632,7 @@ void SceneEstimatorNode::onTimeJump(const ros::Time& from, const ros::Time& to) 
 bool SceneEstimatorNode::save(const std::string& prefix, std::string* message,
                               std::vector<std::string>* files) {
   std::lock_guard<std::mutex> lock(mutex_);
+  takeOverflows();
   RunResults map = pipeline_->currentMap();
   map.method = method_name_;
   map.source = "scene_estimator_node";

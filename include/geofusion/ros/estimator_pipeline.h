@@ -58,6 +58,13 @@ class EstimatorPipeline {
     drops_.count[static_cast<std::size_t>(FrameDrop::kUnsynchronised)] = frames;
   }
 
+  /// Frames lost before process() (the node's frame queue overflowing): counted as seen and
+  /// dropped for `reason`.
+  void countDropped(FrameDrop reason, std::size_t n) {
+    frames_seen_ += n;
+    drops_.add(reason, n);
+  }
+
   FrameDrop lastDrop() const { return last_drop_; }
   /// Why the last frame had no camera pose (FrameDrop::kNoOdometry).
   const std::string& lastPoseError() const { return last_pose_error_; }

@@ -24,10 +24,13 @@
 #include <boost/thread/recursive_mutex.hpp>
 
 #include <atomic>
+#include <condition_variable>
+#include <deque>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace geofusion {
@@ -38,6 +41,15 @@ class SceneEstimatorNode {
   ~SceneEstimatorNode();
 
  private:
+  /// A synchronised set, from the subscriber's callback to the frame thread.
+  struct FrameSet {
+    sensor_msgs::ImageConstPtr depth;
+    sensor_msgs::CameraInfoConstPtr info;
+    geofusion::DetectionArrayConstPtr dets;
+  };
+  void enqueueFrame(FrameSet frame);  // the subscriber's callback: never waits for the estimator
+  void processFrames();               // the frame thread
+  void takeOverflows();               // queue overflows into the pipeline's drops; mutex_ held
   void onFrame(const sensor_msgs::ImageConstPtr& rgb, const sensor_msgs::ImageConstPtr& depth,
                const sensor_msgs::CameraInfoConstPtr& info,
                const geofusion::DetectionArrayConstPtr& dets);
@@ -97,7 +109,15 @@ class SceneEstimatorNode {
   ros::ServiceServer save_srv_, load_srv_, reset_srv_;
   diagnostic_updater::Updater diagnostics_;
   ros::WallTimer diagnostics_timer_;
-  std::size_t frames_ = 0;                // synchronised sets received
+  std::atomic<std::size_t> frames_{0};  // synchronised sets received
+  // The frame queue (input.frame_queue_size) between the subscriber and the frame thread.
+  std::mutex queue_mutex_;
+  std::condition_variable queue_cv_;
+  std::deque<FrameSet> queue_;
+  std::size_t queue_capacity_ = 2;
+  bool stop_frames_ = false;
+  std::atomic<std::size_t> overflowed_{0};  // pushed out, not yet in the pipeline's drops
+  std::thread frame_thread_;
   std::vector<std::size_t> last_counts_;  // input counts at the last diagnostics (rates)
   ros::WallTime last_rates_time_;
   boost::recursive_mutex reconfigure_mutex_;
