@@ -28,22 +28,26 @@ def main():
         json.dump([{k: v for k, v in r.items() if k != 'latency_series_ms'} for r in runs], f,
                   indent=1)
     print('| run | frames sent | maps | frames after the first map without one | latency p50 / p95 '
-          '/ max ms | after the first map p95 / max ms | first map ms | TF p50 / p95 / max ms | '
-          'dropped (estimator, by reason) | background ms a keyframe amortised / skipped | '
-          'manager CPU % |')
-    print('|' + '---|' * 11)
+          '/ max ms | after the first map p95 / max ms | first map ms | from the detections p50 / '
+          'p95 / max ms | TF p50 / p95 / max ms | dropped (estimator, by reason) | background ms '
+          'a keyframe amortised / passed over | manager CPU % |')
+    print('|' + '---|' * 12)
     for r in runs:
         d = r.get('diagnostics', {})
         drops = ', '.join('%s %s' % (k.split(': ', 1)[1], v) for k, v in sorted(d.items())
                           if k.startswith('frames dropped: ') and v not in ('0', 0)) or 'none'
         lat, after, tf = r['latency_ms'], r['latency_ms_after_first'], r['tf_latency_ms']
-        print('| %s | %d | %d | %d | %s / %s / %s | %s / %s | %s | %s / %s / %s | %s | %s / %s | %s |'
+        own = r.get('own_latency_ms', {'p50': None, 'p95': None, 'max': None})
+        amortised = d.get('background ms: a keyframe (amortised)')
+        print('| %s | %d | %d | %d | %s / %s / %s | %s / %s | %s | %s / %s / %s | %s / %s / %s | %s '
+              '| %s / %s | %s |'
               % (r['name'], r['frames_sent'], r['maps_received'],
                  r['frames_without_map_after_first'], fmt(lat['p50']), fmt(lat['p95']),
                  fmt(lat['max']), fmt(after['p95']), fmt(after['max']),
-                 fmt(r['first_map_latency_ms']), fmt(tf['p50']), fmt(tf['p95']), fmt(tf['max']),
-                 drops, d.get('background ms: a keyframe (amortised)', '-'),
-                 d.get('background keyframes skipped (busy)', '-'),
+                 fmt(r['first_map_latency_ms']), fmt(own['p50']), fmt(own['p95']),
+                 fmt(own['max']), fmt(tf['p50']), fmt(tf['p95']), fmt(tf['max']),
+                 drops, fmt(float(amortised), 1) if amortised else '-',
+                 d.get('background keyframes passed over (camera still)', '-'),
                  fmt(r.get('manager_cpu_percent'))))
     fig, ax = plt.subplots(figsize=(9, 4.5))
     for r in runs:

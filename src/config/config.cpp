@@ -140,10 +140,6 @@ class Table {
             [](GeoFusionConfig& c) { return &c.input.frame_queue_size; });
     real("input.sync_max_interval_s", 0, 1, "largest stamp spread of a synchronised set, s",
          [](GeoFusionConfig& c) { return &c.input.sync_max_interval_s; });
-    real("input.sync_min_message_interval_s", 0, 1,
-         "each input's messages are at least this far apart (up to 50 Hz): a set goes on as soon "
-         "as its parts are here, not a frame later (0: wait for the next messages), s",
-         [](GeoFusionConfig& c) { return &c.input.sync_min_message_interval_s; });
     real("input.stale_after_s", 0.1, 600, "watchdog: an input silent this long is reported, s",
          [](GeoFusionConfig& c) { return &c.input.stale_after_s; });
     real("input.sync_timeout_s", 0.1, 600, "watchdog: inputs that never synchronise, s",

@@ -18,7 +18,6 @@ RgbdSubscriber::Config RgbdSubscriber::configOf(const ros::NodeHandle& pnh,
   }
   sub.queue_size = input.queue_size;
   sub.max_interval_s = input.sync_max_interval_s;
-  sub.min_message_interval_s = input.sync_min_message_interval_s;
   sub.time_jump_tolerance_s = input.time_jump_tolerance_s;
   sub.warn_period_s = input.warn_period_s;
   sub.monitor.stale_after_s = input.stale_after_s;
@@ -90,10 +89,6 @@ void RgbdSubscriber::makeSynchronizer() {
   } else {
     rgbd_sync_ = std::make_unique<RgbdSync>(RgbdPolicy(config_.queue_size));
     rgbd_sync_->setMaxIntervalDuration(ros::Duration(config_.max_interval_s));
-    if (config_.min_message_interval_s > 0) {
-      for (int i = 0; i < 3; ++i)
-        rgbd_sync_->setInterMessageLowerBound(i, ros::Duration(config_.min_message_interval_s));
-    }
     rgbd_sync_->registerCallback(boost::bind(&RgbdSubscriber::onSynchronized, this, _1, _2, _3,
                                              geofusion::DetectionArrayConstPtr()));
   }
@@ -103,11 +98,6 @@ std::unique_ptr<RgbdSubscriber::DetectionSync> RgbdSubscriber::makeDetectionSync
     const Config& config) {
   auto sync = std::make_unique<DetectionSync>(DetectionPolicy(config.queue_size));
   sync->setMaxIntervalDuration(ros::Duration(config.max_interval_s));
-  // Known spacing lets a set whose parts share a stamp go at once (no wait for the next ones).
-  if (config.min_message_interval_s > 0) {
-    for (int i = 0; i < 4; ++i)
-      sync->setInterMessageLowerBound(i, ros::Duration(config.min_message_interval_s));
-  }
   return sync;
 }
 

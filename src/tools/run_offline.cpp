@@ -293,7 +293,6 @@ int main(int argc, char** argv) {
   RgbdSubscriber::Config sync_config;
   sync_config.queue_size = config.input.queue_size;
   sync_config.max_interval_s = config.input.sync_max_interval_s;
-  sync_config.min_message_interval_s = config.input.sync_min_message_interval_s;
   auto sync = RgbdSubscriber::makeDetectionSync(sync_config);
   const std::vector<std::string> topics = {opt.rgb_topic, opt.depth_topic, opt.info_topic,
                                            opt.detections_topic};

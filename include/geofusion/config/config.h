@@ -27,12 +27,8 @@ struct InputConfig {
   int queue_size = 10;  ///< messages queued per synchroniser input
   /// Synchronised frames waiting for the estimator's thread (the node): a frame arriving when
   /// this many wait pushes the oldest out, counted as a queue overflow.
-  int frame_queue_size = 2;
+  int frame_queue_size = 5;
   double sync_max_interval_s = 0.05;  ///< largest stamp spread of a synchronised set
-  /// Each input's messages come at least this far apart (cameras up to 50 Hz): the synchroniser
-  /// hands a set on as soon as its parts are here when no later message could match better
-  /// (message_filters' inter-message lower bound), not one frame later; 0: it waits for them.
-  double sync_min_message_interval_s = 0.02;
   double stale_after_s = 3.0;          ///< watchdog: an input silent this long is reported
   double sync_timeout_s = 3.0;         ///< ... all arriving but never synchronised this long
   double time_jump_tolerance_s = 1.0;  ///< stamps going back more: a looping bag, a restart

@@ -37,8 +37,6 @@ class RgbdSubscriber {
     int queue_size = 10;
     /// Largest stamp spread of a synchronised set, seconds.
     double max_interval_s = 0.05;
-    /// Each input's messages at least this far apart (inter-message lower bound), s; 0: unknown.
-    double min_message_interval_s = 0.02;
     /// Stamp decrease that counts as a jump back in time (looping bag, restarted driver), seconds.
     double time_jump_tolerance_s = 1.0;
     /// Period of the watchdog check and of its (throttled) warnings, seconds.
