@@ -28,7 +28,7 @@ struct InputConfig {
   /// Synchronised frames waiting for the estimator's thread (the node): a frame arriving when
   /// this many wait pushes the oldest out, counted as a queue overflow.
   int frame_queue_size = 5;
-  double sync_max_interval_s = 0.05;  ///< largest stamp spread of a synchronised set
+  double sync_max_interval_s = 0.05;   ///< largest stamp spread of a synchronised set
   double stale_after_s = 3.0;          ///< watchdog: an input silent this long is reported
   double sync_timeout_s = 3.0;         ///< ... all arriving but never synchronised this long
   double time_jump_tolerance_s = 1.0;  ///< stamps going back more: a looping bag, a restart
