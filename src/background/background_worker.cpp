@@ -8,17 +8,6 @@
 
 namespace geofusion {
 
-namespace {
-
-// The calling thread's CPU time: what the insertion costs on its core, whatever else runs.
-double threadCpuMs() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
-}
-
-}  // namespace
-
 BackgroundWorker::BackgroundWorker(const BackgroundMapConfig& config, const ModelSet* models)
     : config_(config),
       // Its own OSMesa context: the estimator's scores never wait for the background's masks.

@@ -38,12 +38,6 @@ struct Options {
   std::string info_topic = std::string("/") + kCameraInfoTopic;
 };
 
-double threadCpuMs() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
-}
-
 // The recording's depth images at the keyframes' stamps (nanoseconds), with their camera.
 struct Frame {
   std::vector<float> depth;

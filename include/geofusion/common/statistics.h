@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <ctime>
 #include <vector>
 
 namespace geofusion {
@@ -14,6 +15,13 @@ inline double percentile(std::vector<double> values, double p) {
   std::sort(values.begin(), values.end());
   const double rank = std::clamp(p, 0.0, 1.0) * static_cast<double>(values.size() - 1);
   return values[static_cast<std::size_t>(rank + 0.5)];
+}
+
+/// The calling thread's CPU time, ms: what work costs on its core, whatever else runs.
+inline double threadCpuMs() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
 }
 
 /// What the background's insertions have cost so far.
