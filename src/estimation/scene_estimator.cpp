@@ -78,12 +78,6 @@ const std::pair<DetectionDecision, const char*> kDecisionNames[] = {
     {DetectionDecision::kCandidate, "candidate"},
     {DetectionDecision::kRemoved, "removed"},
 };
-const std::pair<RemovalReason, const char*> kRemovalNames[] = {
-    {RemovalReason::kCandidateTimeout, "candidate_timeout"},
-    {RemovalReason::kSeenAbsent, "seen_absent"},
-    {RemovalReason::kMerged, "merged"},
-};
-
 // The refinement a method runs: the configured one, on only when its stages include it.
 DepthRefinementConfig refinementOf(const EstimatorConfig& config, const MethodStages& stages) {
   DepthRefinementConfig r = config.refinement;
@@ -98,14 +92,6 @@ const char* toString(DetectionDecision decision) {
 
 bool parseDetectionDecision(const std::string& name, DetectionDecision* decision) {
   return parseIn(kDecisionNames, name, decision);
-}
-
-const char* toString(RemovalReason reason) {
-  return nameIn(kRemovalNames, reason);
-}
-
-bool parseRemovalReason(const std::string& name, RemovalReason* reason) {
-  return parseIn(kRemovalNames, name, reason);
 }
 
 SceneEstimator::SceneEstimator(const ModelSet& models, const EstimatorConfig& config,
@@ -274,9 +260,20 @@ KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
     std::vector<int> touched;
     for (int id : detection_object)
       if (id >= 0) touched.push_back(id);
-    removeFalsePositives(touched, t, &removals);
-    if (stages_.free_space_removal) removeObjectsSeenAbsent(kf, touched, &removals);
-    mergeOverlapping(&removals);
+    confirmOrTimeOut(&tracks_, touched, t, config_.association, &removals);
+    if (stages_.free_space_removal && kf.depth.data) {
+      const Eigen::Isometry3d T_cam_map = T_map_cam_.back().inverse();
+      removeSeenAbsent(
+          &tracks_, touched, t, config_.lifecycle,
+          [&](const Track& tr) {
+            return scorer_->score(tr.model, T_cam_map * reportedPose(tr), kf.depth, kf.K);
+          },
+          &removals);
+    }
+    mergeOverlapping(
+        &tracks_, config_.association, collider_.get(),
+        [this](const Track& tr) -> const Eigen::Isometry3d& { return reportedPose(tr); },
+        [this](const Track& tr) { return recentlySeen(tr); }, &removals);
     for (const Removal& r : removals) removed.push_back(r.id);
     for (int& id : detection_object) {
       if (std::find(removed.begin(), removed.end(), id) != removed.end()) id = -1;
@@ -518,15 +515,7 @@ Eigen::MatrixXd SceneEstimator::associationLikelihood(const Keyframe& kf,
 
 SceneEstimator::Track& SceneEstimator::startTrack(const std::shared_ptr<const ObjectModel>& model,
                                                   const Eigen::Isometry3d& T_map_obj, int t) {
-  Track tr;
-  tr.id = next_id_++;
-  tr.model = model;
-  tr.T_stage_one = tr.T_refined = T_map_obj;
-  tr.first_keyframe = t;
-  const Eigen::AlignedBox3f box = boxOf(*tr.model);
-  tr.box_centre = box.center().cast<double>();
-  tr.box_half = (0.5f * box.diagonal()).cast<double>();
-  tracks_.push_back(tr);
+  tracks_.push_back(makeTrack(next_id_++, model, T_map_obj, t));
   return tracks_.back();
 }
 
@@ -539,141 +528,6 @@ std::vector<std::size_t> SceneEstimator::reportedTracks() const {
   for (std::size_t j = 0; j < tracks_.size(); ++j)
     if (tracks_[j].confirmed || !stages_.false_positive_removal) out.push_back(j);
   return out;
-}
-
-void SceneEstimator::removeFalsePositives(const std::vector<int>& touched, int keyframe,
-                                          std::vector<Removal>* removed) {
-  std::vector<Track> kept;
-  for (Track& tr : tracks_) {
-    if (std::find(touched.begin(), touched.end(), tr.id) != touched.end()) {
-      const double f = falsePositiveScore(tr.best_consistency, tr.measurementCount());
-      tr.confirmed = f <= config_.association.eps_fp;
-    }
-    // A candidate above eps_fp is not in the map; unseen for long, it is dropped.
-    if (!tr.confirmed &&
-        keyframe - tr.last_keyframe > config_.association.candidate_timeout_keyframes) {
-      removed->push_back({tr.id, RemovalReason::kCandidateTimeout});
-    } else {
-      kept.push_back(std::move(tr));
-    }
-  }
-  tracks_ = std::move(kept);
-}
-
-// Objects the depth image shows gone: a confirmed object in view that no detection measured is
-// rendered at its pose; free space over its visible, unoccluded surface for
-// lifecycle.free_space_keyframes keyframes in a row removes it (LifecycleConfig).
-void SceneEstimator::removeObjectsSeenAbsent(const Keyframe& kf, const std::vector<int>& measured,
-                                             std::vector<Removal>* removed) {
-  if (!kf.depth.data) return;
-  const LifecycleConfig& c = config_.lifecycle;
-  const Eigen::Isometry3d T_cam_map = T_map_cam_.back().inverse();
-  const int t = static_cast<int>(T_map_cam_.size()) - 1;
-  // The confirmed objects no detection measured, least recently checked first; at most
-  // max_checks_per_keyframe of them rendered (an object out of view costs no render).
-  std::vector<std::size_t> unmeasured;
-  for (std::size_t j = 0; j < tracks_.size(); ++j) {
-    Track& tr = tracks_[j];
-    if (std::find(measured.begin(), measured.end(), tr.id) != measured.end())
-      tr.free_space_keyframes = 0;
-    else if (tr.confirmed)
-      unmeasured.push_back(j);
-  }
-  std::stable_sort(unmeasured.begin(), unmeasured.end(), [&](std::size_t a, std::size_t b) {
-    return tracks_[a].last_checked < tracks_[b].last_checked;
-  });
-  int checks = 0;
-  for (std::size_t j : unmeasured) {
-    if (c.max_checks_per_keyframe > 0 && checks >= c.max_checks_per_keyframe) break;
-    Track& tr = tracks_[j];
-    const ConsistencyResult seen =
-        scorer_->score(tr.model, T_cam_map * reportedPose(tr), kf.depth, kf.K);
-    if (seen.rendered == 0) continue;  // out of view
-    ++checks;
-    tr.last_checked = t;
-    if (seen.determined && seen.r_occ <= c.max_occlusion_ratio) {
-      if (seen.r_out >= c.free_space_outlier_ratio)
-        ++tr.free_space_keyframes;
-      else if (seen.r_in >= c.seen_inlier_ratio)
-        tr.free_space_keyframes = 0;
-    }
-  }
-  std::vector<Track> kept;
-  for (Track& tr : tracks_) {
-    if (tr.free_space_keyframes >= std::max(1, c.free_space_keyframes))
-      removed->push_back({tr.id, RemovalReason::kSeenAbsent});
-    else
-      kept.push_back(std::move(tr));
-  }
-  tracks_ = std::move(kept);
-}
-
-double SceneEstimator::Track::depthEvidence() const {
-  double sum = 0.0;
-  for (const Observation& o : observations) sum += o.consistency;
-  return sum;
-}
-
-// Whether A and B are one object mapped twice (the paper's overlap test, issue 32): their boxes
-// overlap by more than merge_ratio and their hulls interpenetrate by more than neighbours in
-// clutter can. Thin objects (markers, scissors) cannot interpenetrate by much: the bound scales
-// down with the thinner object's smallest extent. Objects of two classes (a real object differs
-// from its mesh by millimetres, so real neighbours overlap a little) must interpenetrate by
-// merge_cross_class_fraction of that extent: a look-alike reported in place of the object.
-bool SceneEstimator::mappedTwice(const Track& A, const Track& B) const {
-  const AssociationConfig& c = config_.association;
-  Eigen::Isometry3d Ta = reportedPose(A), Tb = reportedPose(B);
-  Ta.translation() += Ta.linear() * A.box_centre;
-  Tb.translation() += Tb.linear() * B.box_centre;
-  if (boxCollisionRatio(Ta, A.box_half, Tb, B.box_half) <= c.merge_ratio) return false;
-  const double thinnest = 2.0 * std::min(A.box_half.minCoeff(), B.box_half.minCoeff());
-  double needed = std::min(c.merge_min_penetration_m, c.merge_thin_fraction * thinnest);
-  if (A.model->name != B.model->name)
-    needed = std::max(needed, c.merge_cross_class_fraction * thinnest);
-  return collider_->penetration(A.model, reportedPose(A), B.model, reportedPose(B)) >= needed;
-}
-
-// The observations of D (same class) taken into K, one measurement per keyframe: K's own wins.
-void SceneEstimator::absorb(const Track& D, Track* K) {
-  for (const Observation& o : D.observations) {
-    const bool clash = std::any_of(K->observations.begin(), K->observations.end(),
-                                   [&](const Observation& x) { return x.keyframe == o.keyframe; });
-    if (!clash) K->observations.push_back(o);
-  }
-  std::sort(K->observations.begin(), K->observations.end(),
-            [](const Observation& x, const Observation& y) { return x.keyframe < y.keyframe; });
-  K->folded.clear();  // folded again from the merged observations
-  for (Observation& o : K->observations) o.folded = false;
-  K->best_consistency = std::max(K->best_consistency, D.best_consistency);
-  K->first_keyframe = std::min(K->first_keyframe, D.first_keyframe);
-  K->last_keyframe = std::max(K->last_keyframe, D.last_keyframe);
-}
-
-void SceneEstimator::mergeOverlapping(std::vector<Removal>* removed) {
-  bool merged = true;
-  while (merged) {
-    merged = false;
-    for (std::size_t a = 0; a < tracks_.size() && !merged; ++a) {
-      for (std::size_t b = a + 1; b < tracks_.size() && !merged; ++b) {
-        const Track &A = tracks_[a], &B = tracks_[b];
-        if (!recentlySeen(A) && !recentlySeen(B)) continue;  // checked when last seen
-        if (!mappedTwice(A, B)) continue;
-        // Two of one class: the one with the higher false-positive score goes into the other (the
-        // paper). Two classes (a look-alike reported for a stretch, a persistent phantom beside a
-        // real object): the one the depth supported more over all its measurements stays.
-        const bool same_class = A.model->name == B.model->name;
-        const bool keep_a = same_class
-                                ? falsePositiveScore(A.best_consistency, A.measurementCount()) <=
-                                      falsePositiveScore(B.best_consistency, B.measurementCount())
-                                : A.depthEvidence() >= B.depthEvidence();
-        const std::size_t keep = keep_a ? a : b, drop = keep_a ? b : a;
-        if (same_class) absorb(tracks_[drop], &tracks_[keep]);
-        removed->push_back({tracks_[drop].id, RemovalReason::kMerged, tracks_[keep].id});
-        tracks_.erase(tracks_.begin() + static_cast<std::ptrdiff_t>(drop));
-        merged = true;
-      }
-    }
-  }
 }
 
 StageReport SceneEstimator::runStageOne() {

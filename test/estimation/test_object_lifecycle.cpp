@@ -2,7 +2,9 @@
 // depth noise: a mapped object that is no longer detected but still seen stays; taken away (free
 // space where it was), it leaves the map within a few keyframes; moved, it is mapped where it now
 // is and not where it was. Its contacts are one per pair and stable from keyframe to keyframe.
+#include "geofusion/estimation/object_lifecycle.h"
 #include "geofusion/estimation/scene_estimator.h"
+#include "geofusion/model/collision.h"
 #include "geofusion/model/object_model.h"
 
 #include "table_scene.h"
@@ -211,6 +213,190 @@ TEST(ObjectOverlap, AMeshOverlappingItsNeighboursByMillimetresIsKept) {
   EXPECT_TRUE(std::any_of(merged.begin(), merged.end(), [](const Removal& m) {
     return m.reason == RemovalReason::kMerged;
   })) << "the case is not exercised: nothing merges even by the old rule";
+}
+
+// The lifecycle's steps on their own (object_lifecycle.h): tracks made by hand, the depth's
+// verdict given, the collider the estimator's.
+class LifecycleSteps : public ::testing::Test {
+ protected:
+  LifecycleSteps() : models(ModelSet::builtinPrimitives()) {}
+
+  std::shared_ptr<const ObjectModel> model(const std::string& name) const {
+    for (const auto& m : models.models())
+      if (m->name == name) return m;
+    ADD_FAILURE() << "no model " << name;
+    return nullptr;
+  }
+  // A track measured at keyframes first..last, each measurement with consistency `c`.
+  ObjectTrack track(const std::string& name, int id, const Eigen::Vector3d& at, int first, int last,
+                    double c) const {
+    ObjectTrack tr = makeTrack(id, model(name), Eigen::Isometry3d(Eigen::Translation3d(at)), first);
+    for (int k = first; k <= last; ++k) {
+      TrackObservation o;
+      o.keyframe = k;
+      o.consistency = c;
+      tr.observations.push_back(o);
+    }
+    tr.best_consistency = c;
+    tr.last_keyframe = last;
+    return tr;
+  }
+  static std::vector<int> ids(const std::vector<ObjectTrack>& tracks) {
+    std::vector<int> out;
+    for (const ObjectTrack& tr : tracks) out.push_back(tr.id);
+    return out;
+  }
+
+  ModelSet models;
+  AssociationConfig association;
+  LifecycleConfig lifecycle;
+};
+
+TEST_F(LifecycleSteps, ATrackIsConfirmedByItsScoreAndACandidateTimesOut) {
+  std::vector<ObjectTrack> tracks = {
+      track("005_tomato_soup_can", 0, {0, 0, 0}, 0, 3, 0.95),  // measured now, well supported
+      track("003_cracker_box", 1, {0.3, 0, 0}, 0, 0, 0.3),     // weak candidate, long unseen
+      track("025_mug", 2, {0.6, 0, 0}, 0, 0, 0.95)};           // confirmed earlier, long unseen
+  tracks[2].confirmed = true;
+  std::vector<Removal> removed;
+  const int now = association.candidate_timeout_keyframes + 3;
+  confirmOrTimeOut(&tracks, {0}, now, association, &removed);
+  EXPECT_EQ(ids(tracks), (std::vector<int>{0, 2}));
+  EXPECT_TRUE(tracks[0].confirmed);
+  ASSERT_EQ(removed.size(), 1u);
+  EXPECT_EQ(removed[0].id, 1);
+  EXPECT_EQ(removed[0].reason, RemovalReason::kCandidateTimeout);
+  // Within the timeout a weak candidate stays, unconfirmed.
+  std::vector<ObjectTrack> recent = {track("003_cracker_box", 4, {0, 0, 0}, 5, 5, 0.3)};
+  removed.clear();
+  confirmOrTimeOut(&recent, {4}, 6, association, &removed);
+  EXPECT_TRUE(removed.empty());
+  ASSERT_EQ(recent.size(), 1u);
+  EXPECT_FALSE(recent[0].confirmed);
+}
+
+TEST_F(LifecycleSteps, FreeSpaceRemovesAfterTheConfiguredKeyframesAndASightingResets) {
+  std::vector<ObjectTrack> tracks = {track("005_tomato_soup_can", 0, {0, 0, 0}, 0, 0, 0.9),
+                                     track("025_mug", 1, {0.3, 0, 0}, 0, 0, 0.9)};
+  for (ObjectTrack& tr : tracks) tr.confirmed = true;
+  ConsistencyResult free_space, seen;
+  free_space.rendered = seen.rendered = 500;
+  free_space.determined = seen.determined = true;
+  free_space.r_out = 0.9;
+  seen.r_in = 0.9;
+  int looks = 0;
+  auto look = [&](const ObjectTrack& tr) {
+    ++looks;
+    return tr.id == 0 ? free_space : seen;
+  };
+  std::vector<Removal> removed;
+  for (int t = 1; t < lifecycle.free_space_keyframes; ++t) {
+    removeSeenAbsent(&tracks, {}, t, lifecycle, look, &removed);
+    EXPECT_TRUE(removed.empty()) << "removed after " << t << " keyframes";
+  }
+  removeSeenAbsent(&tracks, {}, lifecycle.free_space_keyframes, lifecycle, look, &removed);
+  ASSERT_EQ(removed.size(), 1u);
+  EXPECT_EQ(removed[0].id, 0);
+  EXPECT_EQ(removed[0].reason, RemovalReason::kSeenAbsent);
+  EXPECT_EQ(ids(tracks), (std::vector<int>{1}));
+  EXPECT_EQ(looks, 2 * lifecycle.free_space_keyframes);
+  // Measured by a detection, an object is not looked at and its count restarts.
+  tracks[0].free_space_keyframes = lifecycle.free_space_keyframes - 1;
+  looks = 0;
+  removeSeenAbsent(&tracks, {1}, 10, lifecycle, look, &removed);
+  EXPECT_EQ(looks, 0);
+  EXPECT_EQ(tracks[0].free_space_keyframes, 0);
+}
+
+TEST_F(LifecycleSteps, FreeSpaceChecksAreBoundedLeastRecentlyCheckedFirstAndOutOfViewIsFree) {
+  std::vector<ObjectTrack> tracks;
+  for (int i = 0; i < 5; ++i) {
+    tracks.push_back(track("005_tomato_soup_can", i, {0.2 * i, 0, 0}, 0, 0, 0.9));
+    tracks.back().confirmed = true;
+    tracks.back().last_checked = 10 - i;  // 4 was checked longest ago
+  }
+  lifecycle.max_checks_per_keyframe = 2;
+  ConsistencyResult in_view;
+  in_view.rendered = 100;
+  std::vector<int> looked;
+  auto look = [&](const ObjectTrack& tr) {
+    looked.push_back(tr.id);
+    return tr.id == 4 ? ConsistencyResult() : in_view;  // 4 is out of view: rendered 0
+  };
+  std::vector<Removal> removed;
+  removeSeenAbsent(&tracks, {}, 20, lifecycle, look, &removed);
+  EXPECT_EQ(looked, (std::vector<int>{4, 3, 2}));  // 4 cost no check
+  EXPECT_EQ(tracks[4].last_checked, 6);
+  EXPECT_EQ(tracks[3].last_checked, 20);
+  EXPECT_EQ(tracks[2].last_checked, 20);
+}
+
+TEST_F(LifecycleSteps, OneObjectMappedTwiceIsMergedIntoTheBetterOneWithItsObservations) {
+  HullCollider collider;
+  std::vector<ObjectTrack> tracks = {track("005_tomato_soup_can", 0, {0, 0, 0}, 0, 4, 0.6),
+                                     track("005_tomato_soup_can", 1, {0.005, 0, 0}, 3, 6, 0.95),
+                                     track("003_cracker_box", 2, {0.4, 0, 0}, 0, 6, 0.9)};
+  std::vector<Removal> removed;
+  const TrackPose pose = [](const ObjectTrack& tr) -> const Eigen::Isometry3d& {
+    return tr.T_stage_one;
+  };
+  mergeOverlapping(
+      &tracks, association, &collider, pose, [](const ObjectTrack&) { return true; }, &removed);
+  EXPECT_EQ(ids(tracks), (std::vector<int>{1, 2}));
+  ASSERT_EQ(removed.size(), 1u);
+  EXPECT_EQ(removed[0].id, 0);
+  EXPECT_EQ(removed[0].reason, RemovalReason::kMerged);
+  EXPECT_EQ(removed[0].into, 1);
+  // One measurement a keyframe: 0..6, the kept track's own at 3 and 4.
+  ASSERT_EQ(tracks[0].observations.size(), 7u);
+  for (int k = 0; k < 7; ++k) EXPECT_EQ(tracks[0].observations[k].keyframe, k);
+  EXPECT_DOUBLE_EQ(tracks[0].observations[3].consistency, 0.95);
+  EXPECT_EQ(tracks[0].first_keyframe, 0);
+  EXPECT_EQ(tracks[0].last_keyframe, 6);
+  // Neither seen recently: not checked again.
+  std::vector<ObjectTrack> stale = {track("005_tomato_soup_can", 5, {0, 0, 0}, 0, 1, 0.6),
+                                    track("005_tomato_soup_can", 6, {0.005, 0, 0}, 0, 1, 0.9)};
+  removed.clear();
+  mergeOverlapping(
+      &stale, association, &collider, pose, [](const ObjectTrack&) { return false; }, &removed);
+  EXPECT_EQ(stale.size(), 2u);
+}
+
+TEST_F(LifecycleSteps, AcrossClassesTheDepthsSupportDecidesAndAFewMillimetresIsContact) {
+  HullCollider collider;
+  const TrackPose pose = [](const ObjectTrack& tr) -> const Eigen::Isometry3d& {
+    return tr.T_stage_one;
+  };
+  auto always = [](const ObjectTrack&) { return true; };
+  // A look-alike reported in the object's place: the one the depth supported more stays, and
+  // takes none of the other's observations.
+  std::vector<ObjectTrack> swapped = {track("004_sugar_box", 0, {0, 0, 0}, 0, 2, 0.7),
+                                      track("003_cracker_box", 1, {0, 0, 0}, 0, 9, 0.9)};
+  std::vector<Removal> removed;
+  mergeOverlapping(&swapped, association, &collider, pose, always, &removed);
+  EXPECT_EQ(ids(swapped), (std::vector<int>{1}));
+  ASSERT_EQ(removed.size(), 1u);
+  EXPECT_EQ(removed[0].into, 1);
+  EXPECT_EQ(swapped[0].observations.size(), 10u);
+  // A pudding box with a gelatin box sunk 10 mm into its top: two classes in contact, kept.
+  const Eigen::AlignedBox3f pudding = boxOf(*model("008_pudding_box"));
+  const Eigen::AlignedBox3f gelatin = boxOf(*model("009_gelatin_box"));
+  const double z = pudding.max().z() - gelatin.min().z() - 0.010;
+  std::vector<ObjectTrack> stacked = {track("008_pudding_box", 0, {0, 0, 0}, 0, 5, 0.9),
+                                      track("009_gelatin_box", 1, {0, 0, z}, 0, 5, 0.9)};
+  ASSERT_GT(collider.penetration(stacked[0].model, stacked[0].T_stage_one, stacked[1].model,
+                                 stacked[1].T_stage_one),
+            0.008);
+  removed.clear();
+  mergeOverlapping(&stacked, association, &collider, pose, always, &removed);
+  EXPECT_TRUE(removed.empty());
+  // The same sunk pair of one class is one object mapped twice.
+  stacked[1].model = stacked[0].model;
+  stacked[1].box_half = stacked[0].box_half;
+  stacked[1].box_centre = stacked[0].box_centre;
+  stacked[1].T_stage_one.translation().z() = 0.010;
+  mergeOverlapping(&stacked, association, &collider, pose, always, &removed);
+  EXPECT_EQ(removed.size(), 1u);
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include "geofusion/estimation/contacts.h"
 #include "geofusion/estimation/depth_refinement.h"
 #include "geofusion/estimation/detection_monitor.h"
+#include "geofusion/estimation/object_lifecycle.h"
 #include "geofusion/estimation/optimization.h"
 #include "geofusion/estimation/relations.h"
 #include "geofusion/estimation/relocalisation.h"
@@ -62,23 +63,6 @@ struct MethodStages {
   bool relations_and_stage_two = false;     ///< contacts and stage II (reported poses: stage II)
 };
 MethodStages stagesOf(Method method);
-
-/// When a mapped object is gone (picked up, moved): only on evidence. A confirmed object in view
-/// that no detection measured is rendered at its pose against the depth image; when at least
-/// free_space_outlier_ratio of its visible surface shows the observed surface behind it (free
-/// space where it should be), while at most max_occlusion_ratio of it is hidden, for
-/// free_space_keyframes keyframes in a row, it leaves the map. A keyframe that sees its surface
-/// (inlier ratio at least seen_inlier_ratio) resets the count; not being detected never removes it.
-struct LifecycleConfig {
-  double free_space_outlier_ratio = 0.5;
-  double max_occlusion_ratio = 0.5;
-  double seen_inlier_ratio = 0.5;
-  int free_space_keyframes = 3;
-  /// At most this many of the checks (renders) a keyframe, the objects checked least recently
-  /// first: the cost stays bounded when many mapped objects go undetected (biased or missing
-  /// detections). 0: every undetected object in view, every keyframe.
-  int max_checks_per_keyframe = 8;
-};
 
 struct EstimatorConfig {
   Method method = Method::kGeoFusion;
@@ -174,21 +158,6 @@ struct DetectionReport {
   int object = -1;  ///< the object (or candidate) id it went to
 };
 
-/// Why an object (or candidate) left the map.
-enum class RemovalReason {
-  kCandidateTimeout,  ///< a candidate (false-positive score above eps_fp) unseen for too long
-  kSeenAbsent,        ///< the depth showed free space where it stood (lifecycle.*)
-  kMerged,            ///< merged into an overlapping object (`into`)
-};
-const char* toString(RemovalReason reason);
-bool parseRemovalReason(const std::string& name, RemovalReason* reason);
-
-struct Removal {
-  int id = -1;
-  RemovalReason reason = RemovalReason::kCandidateTimeout;
-  int into = -1;  ///< kMerged: the object it went into
-};
-
 struct KeyframeResult {
   int keyframe = -1;
   double stamp_s = 0.0;
@@ -247,38 +216,8 @@ class SceneEstimator {
   int numKeyframes() const { return static_cast<int>(T_map_cam_.size()); }
 
  private:
-  struct Observation {
-    int keyframe = 0;
-    Eigen::Isometry3d T_cam_obj = Eigen::Isometry3d::Identity();
-    double consistency = 0.0;  ///< f_gc (B-SLAM: the detector score)
-    bool refined = false;      ///< depth-refined: tight along the ray in stage I
-    bool gated = false;        ///< left out of stage I (residual beyond the gate)
-    bool folded = false;       ///< its camera left stage I's window: in Track::folded
-  };
-  struct Track {
-    int id = -1;
-    std::shared_ptr<const ObjectModel> model;
-    Eigen::Isometry3d T_stage_one = Eigen::Isometry3d::Identity();  ///< stage I / initial
-    Eigen::Isometry3d T_refined = Eigen::Isometry3d::Identity();    ///< stage II
-    std::vector<Observation> observations;
-    /// Marginalising outside stage I's window: the observations whose cameras left it.
-    FoldedMeasurements folded;
-    double best_consistency = 0.0;
-    int first_keyframe = -1, last_keyframe = -1;
-    bool confirmed = false;        ///< false-positive score at most eps_fp: part of the map
-    double variance = 1.0;         ///< stage I measurement variance factor (noise adaptation)
-    int free_space_keyframes = 0;  ///< keyframes in a row showing free space where it should be
-    int last_checked = -1;         ///< keyframe of its last free-space check (rendered)
-    int prior_measurements = 0;    ///< measurements made before a resume (saved with the map)
-    /// n_j: its measurements, those before a resume included.
-    int measurementCount() const {
-      return static_cast<int>(observations.size()) + prior_measurements;
-    }
-    Eigen::Vector3d box_centre = Eigen::Vector3d::Zero();  ///< model-frame bounding box
-    Eigen::Vector3d box_half = Eigen::Vector3d::Zero();
-    /// How much the depth supported it over all its measurements: the sum of their f_gc.
-    double depthEvidence() const;
-  };
+  using Observation = TrackObservation;
+  using Track = ObjectTrack;
 
   /// The keyframe's detections with the models of their classes and their scores.
   struct ScoredDetections {
@@ -313,13 +252,6 @@ class SceneEstimator {
   const Eigen::Isometry3d& reportedPose(const Track& track) const;
   /// Tracks in the map: confirmed ones (all for methods without false-positive removal).
   std::vector<std::size_t> reportedTracks() const;
-  void removeFalsePositives(const std::vector<int>& touched, int keyframe,
-                            std::vector<Removal>* removed);
-  void mergeOverlapping(std::vector<Removal>* removed);
-  bool mappedTwice(const Track& a, const Track& b) const;
-  static void absorb(const Track& dropped, Track* kept);
-  void removeObjectsSeenAbsent(const Keyframe& keyframe, const std::vector<int>& measured,
-                               std::vector<Removal>* removed);
   bool stageOneDue(int t) const;
   StageReport runStageOne();
   void adaptNoise(const std::vector<std::size_t>& reported,

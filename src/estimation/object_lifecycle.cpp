@@ -1,0 +1,174 @@
+#include "geofusion/estimation/object_lifecycle.h"
+
+#include "geofusion/common/enum_names.h"
+#include "geofusion/model/collision.h"
+
+#include <algorithm>
+
+namespace geofusion {
+namespace {
+
+const std::pair<RemovalReason, const char*> kRemovalNames[] = {
+    {RemovalReason::kCandidateTimeout, "candidate_timeout"},
+    {RemovalReason::kSeenAbsent, "seen_absent"},
+    {RemovalReason::kMerged, "merged"},
+};
+
+}  // namespace
+
+const char* toString(RemovalReason reason) {
+  return nameIn(kRemovalNames, reason);
+}
+
+bool parseRemovalReason(const std::string& name, RemovalReason* reason) {
+  return parseIn(kRemovalNames, name, reason);
+}
+
+double ObjectTrack::depthEvidence() const {
+  double sum = 0.0;
+  for (const TrackObservation& o : observations) sum += o.consistency;
+  return sum;
+}
+
+ObjectTrack makeTrack(int id, const std::shared_ptr<const ObjectModel>& model,
+                      const Eigen::Isometry3d& T_map_obj, int keyframe) {
+  ObjectTrack tr;
+  tr.id = id;
+  tr.model = model;
+  tr.T_stage_one = tr.T_refined = T_map_obj;
+  tr.first_keyframe = keyframe;
+  const Eigen::AlignedBox3f box = boxOf(*tr.model);
+  tr.box_centre = box.center().cast<double>();
+  tr.box_half = (0.5f * box.diagonal()).cast<double>();
+  return tr;
+}
+
+void confirmOrTimeOut(std::vector<ObjectTrack>* tracks, const std::vector<int>& touched,
+                      int keyframe, const AssociationConfig& config,
+                      std::vector<Removal>* removed) {
+  std::vector<ObjectTrack> kept;
+  for (ObjectTrack& tr : *tracks) {
+    if (std::find(touched.begin(), touched.end(), tr.id) != touched.end()) {
+      const double f = falsePositiveScore(tr.best_consistency, tr.measurementCount());
+      tr.confirmed = f <= config.eps_fp;
+    }
+    // A candidate above eps_fp is not in the map; unseen for long, it is dropped.
+    if (!tr.confirmed && keyframe - tr.last_keyframe > config.candidate_timeout_keyframes)
+      removed->push_back({tr.id, RemovalReason::kCandidateTimeout});
+    else
+      kept.push_back(std::move(tr));
+  }
+  *tracks = std::move(kept);
+}
+
+void removeSeenAbsent(std::vector<ObjectTrack>* tracks, const std::vector<int>& measured,
+                      int keyframe, const LifecycleConfig& config, const FreeSpaceLook& look,
+                      std::vector<Removal>* removed) {
+  std::vector<ObjectTrack>& all = *tracks;
+  // The confirmed objects no detection measured, least recently checked first; at most
+  // max_checks_per_keyframe of them rendered (an object out of view costs no render).
+  std::vector<std::size_t> unmeasured;
+  for (std::size_t j = 0; j < all.size(); ++j) {
+    ObjectTrack& tr = all[j];
+    if (std::find(measured.begin(), measured.end(), tr.id) != measured.end())
+      tr.free_space_keyframes = 0;
+    else if (tr.confirmed)
+      unmeasured.push_back(j);
+  }
+  std::stable_sort(unmeasured.begin(), unmeasured.end(), [&](std::size_t a, std::size_t b) {
+    return all[a].last_checked < all[b].last_checked;
+  });
+  int checks = 0;
+  for (std::size_t j : unmeasured) {
+    if (config.max_checks_per_keyframe > 0 && checks >= config.max_checks_per_keyframe) break;
+    ObjectTrack& tr = all[j];
+    const ConsistencyResult seen = look(tr);
+    if (seen.rendered == 0) continue;  // out of view
+    ++checks;
+    tr.last_checked = keyframe;
+    if (seen.determined && seen.r_occ <= config.max_occlusion_ratio) {
+      if (seen.r_out >= config.free_space_outlier_ratio)
+        ++tr.free_space_keyframes;
+      else if (seen.r_in >= config.seen_inlier_ratio)
+        tr.free_space_keyframes = 0;
+    }
+  }
+  std::vector<ObjectTrack> kept;
+  for (ObjectTrack& tr : all) {
+    if (tr.free_space_keyframes >= std::max(1, config.free_space_keyframes))
+      removed->push_back({tr.id, RemovalReason::kSeenAbsent});
+    else
+      kept.push_back(std::move(tr));
+  }
+  all = std::move(kept);
+}
+
+// The paper's overlap test (issue 32): boxes overlapping by more than merge_ratio and hulls
+// interpenetrating by more than neighbours in clutter can. Thin objects (markers, scissors)
+// cannot interpenetrate by much: the bound scales down with the thinner object's smallest extent.
+// Objects of two classes (a real object differs from its mesh by millimetres, so real neighbours
+// overlap a little) must interpenetrate by merge_cross_class_fraction of that extent: a
+// look-alike reported in place of the object.
+bool mappedTwice(const ObjectTrack& a, const Eigen::Isometry3d& T_a, const ObjectTrack& b,
+                 const Eigen::Isometry3d& T_b, const AssociationConfig& config,
+                 HullCollider* collider) {
+  Eigen::Isometry3d Ta = T_a, Tb = T_b;
+  Ta.translation() += Ta.linear() * a.box_centre;
+  Tb.translation() += Tb.linear() * b.box_centre;
+  if (boxCollisionRatio(Ta, a.box_half, Tb, b.box_half) <= config.merge_ratio) return false;
+  const double thinnest = 2.0 * std::min(a.box_half.minCoeff(), b.box_half.minCoeff());
+  double needed = std::min(config.merge_min_penetration_m, config.merge_thin_fraction * thinnest);
+  if (a.model->name != b.model->name)
+    needed = std::max(needed, config.merge_cross_class_fraction * thinnest);
+  return collider->penetration(a.model, T_a, b.model, T_b) >= needed;
+}
+
+void absorb(const ObjectTrack& dropped, ObjectTrack* kept) {
+  for (const TrackObservation& o : dropped.observations) {
+    const bool clash =
+        std::any_of(kept->observations.begin(), kept->observations.end(),
+                    [&](const TrackObservation& x) { return x.keyframe == o.keyframe; });
+    if (!clash) kept->observations.push_back(o);
+  }
+  std::sort(
+      kept->observations.begin(), kept->observations.end(),
+      [](const TrackObservation& x, const TrackObservation& y) { return x.keyframe < y.keyframe; });
+  kept->folded.clear();  // folded again from the merged observations
+  for (TrackObservation& o : kept->observations) o.folded = false;
+  kept->best_consistency = std::max(kept->best_consistency, dropped.best_consistency);
+  kept->first_keyframe = std::min(kept->first_keyframe, dropped.first_keyframe);
+  kept->last_keyframe = std::max(kept->last_keyframe, dropped.last_keyframe);
+}
+
+void mergeOverlapping(std::vector<ObjectTrack>* tracks, const AssociationConfig& config,
+                      HullCollider* collider, const TrackPose& pose,
+                      const std::function<bool(const ObjectTrack&)>& recently_seen,
+                      std::vector<Removal>* removed) {
+  std::vector<ObjectTrack>& all = *tracks;
+  bool merged = true;
+  while (merged) {
+    merged = false;
+    for (std::size_t a = 0; a < all.size() && !merged; ++a) {
+      for (std::size_t b = a + 1; b < all.size() && !merged; ++b) {
+        const ObjectTrack &A = all[a], &B = all[b];
+        if (!recently_seen(A) && !recently_seen(B)) continue;  // checked when last seen
+        if (!mappedTwice(A, pose(A), B, pose(B), config, collider)) continue;
+        // Two of one class: the one with the higher false-positive score goes into the other (the
+        // paper). Two classes (a look-alike reported for a stretch, a persistent phantom beside a
+        // real object): the one the depth supported more over all its measurements stays.
+        const bool same_class = A.model->name == B.model->name;
+        const bool keep_a = same_class
+                                ? falsePositiveScore(A.best_consistency, A.measurementCount()) <=
+                                      falsePositiveScore(B.best_consistency, B.measurementCount())
+                                : A.depthEvidence() >= B.depthEvidence();
+        const std::size_t keep = keep_a ? a : b, drop = keep_a ? b : a;
+        if (same_class) absorb(all[drop], &all[keep]);
+        removed->push_back({all[drop].id, RemovalReason::kMerged, all[keep].id});
+        all.erase(all.begin() + static_cast<std::ptrdiff_t>(drop));
+        merged = true;
+      }
+    }
+  }
+}
+
+}  // namespace geofusion
