@@ -192,22 +192,42 @@ bool projectionsOverlap(const std::vector<Eigen::Vector3d>& a,
   return depth >= min_overlap;
 }
 
-std::vector<FeatureContact> findContacts(const std::vector<PosedModel>& objects, int a, int b,
-                                         const Eigen::Vector3d& gravity, const ContactConfig& cfg) {
-  std::vector<FeatureContact> out;
-  if (a == b || a < 0 || b < 0 || a >= static_cast<int>(objects.size()) ||
-      b >= static_cast<int>(objects.size()) || !objects[a].model || !objects[b].model)
-    return out;
-  const Eigen::Vector3d up = -gravity.normalized();
-  const auto planes_a = worldPlanes(objects[a]), planes_b = worldPlanes(objects[b]);
-  const auto curves_a = worldCurves(objects[a]), curves_b = worldCurves(objects[b]);
+namespace {
+
+// The paper's contact tests between two posed objects, type by type (plane-plane first, then
+// plane-curve, curve-curve, plane-edge: the first type that finds contacts gives them).
+class ContactFinder {
+ public:
+  ContactFinder(const std::vector<PosedModel>& objects, const Eigen::Vector3d& gravity,
+                const ContactConfig& cfg)
+      : objects_(objects), up_(-gravity.normalized()), cfg_(cfg) {}
+
+  std::vector<FeatureContact> find(int a, int b) {
+    out_.clear();
+    const auto planes_a = worldPlanes(objects_[a]), planes_b = worldPlanes(objects_[b]);
+    const auto curves_a = worldCurves(objects_[a]), curves_b = worldCurves(objects_[b]);
+    planePlane(planes_a, a, planes_b, b);
+    if (!out_.empty()) return out_;
+    planeCurve(planes_a, a, curves_b, b);
+    planeCurve(planes_b, b, curves_a, a);
+    if (!out_.empty()) return out_;
+    curveCurve(curves_a, a, curves_b, b);
+    if (!out_.empty()) return out_;
+    planeEdge(planes_a, a, b);
+    planeEdge(planes_b, b, a);
+    return out_;
+  }
+
+ private:
+  // A distance term within the thresholds: a small gap or an interpenetration of estimates.
+  bool near(double dist, double eps) const { return dist < eps && dist > -cfg_.max_penetration_m; }
 
   // Makes a candidate between objects i and j (normal from i to j), applies the support and
-  // projection checks, and keeps it.
-  auto accept = [&](int i, int j, ContactType type, FeatureRef fi, FeatureRef fj,
-                    const Eigen::Vector3d& normal, double dir, double dist,
-                    const std::vector<Eigen::Vector3d>& outline_i,
-                    const std::vector<Eigen::Vector3d>& outline_j) {
+  // projection checks, and keeps it. Returns whether it was kept.
+  bool accept(int i, int j, ContactType type, FeatureRef fi, FeatureRef fj,
+              const Eigen::Vector3d& normal, double dir, double dist,
+              const std::vector<Eigen::Vector3d>& outline_i,
+              const std::vector<Eigen::Vector3d>& outline_j) {
     FeatureContact c;
     c.object_a = i;
     c.object_b = j;
@@ -217,111 +237,118 @@ std::vector<FeatureContact> findContacts(const std::vector<PosedModel>& objects,
     c.normal = normal;
     c.direction_residual = dir;
     c.distance_residual = dist;
-    const double vertical = c.normal.dot(up);
-    const bool side = std::abs(vertical) < std::sin(cfg.side_max_tilt_deg * M_PI / 180.0);
-    c.kind = std::abs(vertical) > cfg.eps_g ? ContactKind::kSupport
-             : side                         ? ContactKind::kSide
-                                            : ContactKind::kLeaning;
-    if (cfg.support_only && !c.support()) return;
+    const double vertical = c.normal.dot(up_);
+    const bool side = std::abs(vertical) < std::sin(cfg_.side_max_tilt_deg * M_PI / 180.0);
+    c.kind = std::abs(vertical) > cfg_.eps_g ? ContactKind::kSupport
+             : side                          ? ContactKind::kSide
+                                             : ContactKind::kLeaning;
+    if (cfg_.support_only && !c.support()) return false;
     // Project along gravity for support contacts (the paper), along the normal otherwise.
-    const Eigen::Vector3d along = c.support() ? up : c.normal;
-    if (!projectionsOverlap(outline_i, outline_j, along, cfg.min_overlap_m, cfg.line_tolerance_m))
-      return;
+    const Eigen::Vector3d along = c.support() ? up_ : c.normal;
+    if (!projectionsOverlap(outline_i, outline_j, along, cfg_.min_overlap_m, cfg_.line_tolerance_m))
+      return false;
     if (c.support() && vertical < 0) {  // the supporter comes first
       std::swap(c.object_a, c.object_b);
       std::swap(c.feature_a, c.feature_b);
       c.normal = -c.normal;
     }
-    out.push_back(c);
-  };
-  // A distance term within the thresholds: a small gap or an interpenetration of estimates.
-  auto near = [&](double dist, double eps) { return dist < eps && dist > -cfg.max_penetration_m; };
+    out_.push_back(c);
+    return true;
+  }
 
-  // Plane-plane.
-  for (std::size_t u = 0; u < planes_a.size(); ++u) {
-    for (std::size_t v = 0; v < planes_b.size(); ++v) {
-      const WorldPlane &pu = planes_a[u], &pv = planes_b[v];
-      const double dir = std::abs(pu.normal.dot(pv.normal) + 1.0);
-      const double dist = pu.normal.dot(pv.center - pu.center);
-      if (dir >= cfg.eps_n_pp || !near(dist, cfg.eps_c_pp)) continue;
-      accept(a, b, ContactType::kPlanePlane, {true, static_cast<int>(u)},
-             {true, static_cast<int>(v)}, pu.normal, dir, dist, pu.boundary, pv.boundary);
+  void planePlane(const std::vector<WorldPlane>& planes_a, int a,
+                  const std::vector<WorldPlane>& planes_b, int b) {
+    for (std::size_t u = 0; u < planes_a.size(); ++u) {
+      for (std::size_t v = 0; v < planes_b.size(); ++v) {
+        const WorldPlane &pu = planes_a[u], &pv = planes_b[v];
+        const double dir = std::abs(pu.normal.dot(pv.normal) + 1.0);
+        const double dist = pu.normal.dot(pv.center - pu.center);
+        if (dir >= cfg_.eps_n_pp || !near(dist, cfg_.eps_c_pp)) continue;
+        accept(a, b, ContactType::kPlanePlane, {true, static_cast<int>(u)},
+               {true, static_cast<int>(v)}, pu.normal, dir, dist, pu.boundary, pv.boundary);
+      }
     }
   }
-  if (!out.empty()) return out;
 
-  // Plane-curve, both ways round.
-  auto plane_curve = [&](const std::vector<WorldPlane>& planes, int plane_obj,
-                         const std::vector<WorldCurve>& curves, int curve_obj) {
+  void planeCurve(const std::vector<WorldPlane>& planes, int plane_obj,
+                  const std::vector<WorldCurve>& curves, int curve_obj) {
     for (std::size_t u = 0; u < planes.size(); ++u) {
       for (std::size_t v = 0; v < curves.size(); ++v) {
         const WorldPlane& p = planes[u];
         const WorldCurve& k = curves[v];
         const double dir = std::abs(p.normal.dot(k.axis));
         const double dist = p.normal.dot(k.center - p.center) - k.radius;
-        if (dir >= cfg.eps_n_pc || !near(dist, cfg.eps_c_pc)) continue;
+        if (dir >= cfg_.eps_n_pc || !near(dist, cfg_.eps_c_pc)) continue;
         accept(plane_obj, curve_obj, ContactType::kPlaneCurve, {true, static_cast<int>(u)},
                {false, static_cast<int>(v)}, p.normal, dir, dist, p.boundary, {k.end_a, k.end_b});
       }
     }
-  };
-  plane_curve(planes_a, a, curves_b, b);
-  plane_curve(planes_b, b, curves_a, a);
-  if (!out.empty()) return out;
+  }
 
-  // Curve-curve.
-  for (std::size_t u = 0; u < curves_a.size(); ++u) {
-    for (std::size_t v = 0; v < curves_b.size(); ++v) {
-      const WorldCurve &cu = curves_a[u], &cv = curves_b[v];
-      const Eigen::Vector3d d = cv.center - cu.center;
-      Eigen::Vector3d n = cu.axis.cross(cv.axis);
-      if (n.norm() > 0.1) {
-        n.normalize();
-      } else {  // (nearly) parallel axes: the perpendicular from one axis to the other
-        n = d - d.dot(cu.axis) * cu.axis;
-        if (n.norm() < 1e-9) continue;
-        n.normalize();
+  void curveCurve(const std::vector<WorldCurve>& curves_a, int a,
+                  const std::vector<WorldCurve>& curves_b, int b) {
+    for (std::size_t u = 0; u < curves_a.size(); ++u) {
+      for (std::size_t v = 0; v < curves_b.size(); ++v) {
+        const WorldCurve &cu = curves_a[u], &cv = curves_b[v];
+        const Eigen::Vector3d d = cv.center - cu.center;
+        Eigen::Vector3d n = cu.axis.cross(cv.axis);
+        if (n.norm() > 0.1) {
+          n.normalize();
+        } else {  // (nearly) parallel axes: the perpendicular from one axis to the other
+          n = d - d.dot(cu.axis) * cu.axis;
+          if (n.norm() < 1e-9) continue;
+          n.normalize();
+        }
+        if (n.dot(d) < 0) n = -n;
+        const double dist = n.dot(d) - (cu.radius + cv.radius);
+        if (!near(dist, cfg_.eps_c_cc)) continue;
+        accept(a, b, ContactType::kCurveCurve, {false, static_cast<int>(u)},
+               {false, static_cast<int>(v)}, n, 0.0, dist, {cu.end_a, cu.end_b},
+               {cv.end_a, cv.end_b});
       }
-      if (n.dot(d) < 0) n = -n;
-      const double dist = n.dot(d) - (cu.radius + cv.radius);
-      if (!near(dist, cfg.eps_c_cc)) continue;
-      accept(a, b, ContactType::kCurveCurve, {false, static_cast<int>(u)},
-             {false, static_cast<int>(v)}, n, 0.0, dist, {cu.end_a, cu.end_b},
-             {cv.end_a, cv.end_b});
     }
   }
-  if (!out.empty()) return out;
 
-  // Plane-edge, both ways round: a plane against the other hull's nearest points (an edge or a
-  // corner), which must lie within the plane's outline.
-  auto plane_edge = [&](const std::vector<WorldPlane>& planes, int plane_obj, int edge_obj) {
-    const PosedModel& edge_model = objects[static_cast<std::size_t>(edge_obj)];
+  // A plane against the other hull's nearest points (an edge or a corner), which must lie within
+  // the plane's outline.
+  void planeEdge(const std::vector<WorldPlane>& planes, int plane_obj, int edge_obj) {
+    const PosedModel& edge_model = objects_[static_cast<std::size_t>(edge_obj)];
     for (std::size_t u = 0; u < planes.size(); ++u) {
       const WorldPlane& p = planes[u];
       double dist = 0.0;
       const std::vector<Eigen::Vector3d> touching =
-          nearestHullPoints(edge_model, p.center, p.normal, cfg.edge_tolerance_m, &dist);
-      if (touching.empty() || !near(dist, cfg.eps_c_pe)) continue;
+          nearestHullPoints(edge_model, p.center, p.normal, cfg_.edge_tolerance_m, &dist);
+      if (touching.empty() || !near(dist, cfg_.eps_c_pe)) continue;
       std::vector<Eigen::Vector3d> world;
       Eigen::Vector3d mean = Eigen::Vector3d::Zero();
       for (const auto& t : touching) world.push_back(edge_model.T_world_obj * t), mean += t;
-      const std::size_t before = out.size();
-      accept(plane_obj, edge_obj, ContactType::kPlaneEdge, {true, static_cast<int>(u)}, {false, -1},
-             p.normal, 0.0, dist, p.boundary, world);
-      if (out.size() > before) {
-        // Their centroid, moved along the normal to the nearest one's level: on the plane when
-        // the contact holds (the centroid of a polygonal rim lies inside it).
-        const Eigen::Vector3d n_model = edge_model.T_world_obj.linear().transpose() * p.normal;
-        const Eigen::Vector3d centroid = mean / static_cast<double>(touching.size());
-        double level = std::numeric_limits<double>::max();
-        for (const auto& t : touching) level = std::min(level, n_model.dot(t));
-        out.back().edge_point = centroid + n_model * (level - n_model.dot(centroid));
-      }
+      if (!accept(plane_obj, edge_obj, ContactType::kPlaneEdge, {true, static_cast<int>(u)},
+                  {false, -1}, p.normal, 0.0, dist, p.boundary, world))
+        continue;
+      // Their centroid, moved along the normal to the nearest one's level: on the plane when
+      // the contact holds (the centroid of a polygonal rim lies inside it).
+      const Eigen::Vector3d n_model = edge_model.T_world_obj.linear().transpose() * p.normal;
+      const Eigen::Vector3d centroid = mean / static_cast<double>(touching.size());
+      double level = std::numeric_limits<double>::max();
+      for (const auto& t : touching) level = std::min(level, n_model.dot(t));
+      out_.back().edge_point = centroid + n_model * (level - n_model.dot(centroid));
     }
-  };
-  plane_edge(planes_a, a, b);
-  plane_edge(planes_b, b, a);
-  return out;
+  }
+
+  const std::vector<PosedModel>& objects_;
+  const Eigen::Vector3d up_;
+  const ContactConfig& cfg_;
+  std::vector<FeatureContact> out_;
+};
+
+}  // namespace
+
+std::vector<FeatureContact> findContacts(const std::vector<PosedModel>& objects, int a, int b,
+                                         const Eigen::Vector3d& gravity, const ContactConfig& cfg) {
+  const int n = static_cast<int>(objects.size());
+  if (a == b || a < 0 || b < 0 || a >= n || b >= n || !objects[a].model || !objects[b].model)
+    return {};
+  return ContactFinder(objects, gravity, cfg).find(a, b);
 }
 
 std::vector<FeatureContact> findAllContacts(const std::vector<PosedModel>& objects,

@@ -54,20 +54,11 @@ double minWidth(const std::vector<Eigen::Vector3d>& pts, const Eigen::Vector3d& 
   return best;
 }
 
-}  // namespace
-
-SurfaceFeatures extractSurfaceFeatures(const std::vector<Eigen::Vector3f>& points,
-                                       const SurfaceFeatureConfig& cfg) {
-  SurfaceFeatures out;
-  if (points.size() < 4) return out;
-  const TriangleMesh hull = convexHull(points);
-  if (hull.vertices.size() < 4 || hull.triangles.empty()) return out;
-  std::vector<Eigen::Vector3d> hv;
-  hv.reserve(hull.vertices.size());
-  for (const auto& p : hull.vertices) hv.push_back(p.cast<double>());
-
+// The hull's facets (outward, counter-clockwise), degenerate ones left out; their total area.
+std::vector<Facet> hullFacets(const TriangleMesh& hull, const std::vector<Eigen::Vector3d>& hv,
+                              double* total_area) {
   std::vector<Facet> facets;
-  double total_area = 0.0;
+  *total_area = 0.0;
   for (const auto& t : hull.triangles) {  // outward, counter-clockwise
     Facet f;
     f.v[0] = t[0];
@@ -79,11 +70,18 @@ SurfaceFeatures extractSurfaceFeatures(const std::vector<Eigen::Vector3f>& point
     if (f.area < 1e-12) continue;
     f.centroid = (a + b + c) / 3.0;
     f.normal = n.normalized();
-    total_area += f.area;
+    *total_area += f.area;
     facets.push_back(f);
   }
+  return facets;
+}
 
-  // Planes: greedy region growing from the largest unassigned facet.
+// Planes: greedy region growing from the largest unassigned facet; each facet gets its plane.
+std::vector<PlaneFeature> growPlanes(std::vector<Facet>* facet_list,
+                                     const std::vector<Eigen::Vector3d>& hv, double total_area,
+                                     const SurfaceFeatureConfig& cfg) {
+  std::vector<Facet>& facets = *facet_list;
+  std::vector<PlaneFeature> planes;
   std::vector<std::size_t> order(facets.size());
   std::iota(order.begin(), order.end(), 0);
   std::sort(order.begin(), order.end(),
@@ -124,17 +122,24 @@ SurfaceFeatures extractSurfaceFeatures(const std::vector<Eigen::Vector3f>& point
     plane.boundary = orderedBoundary(pts, plane.normal);
     for (std::size_t i : members) facets[i].plane = next_plane;
     ++next_plane;
-    out.planes.push_back(std::move(plane));
+    planes.push_back(std::move(plane));
   }
+  return planes;
+}
 
-  // Cylinder side: two opposite planes (the caps) and the rest of the hull wrapping their axis.
+// Cylinder sides: two opposite planes (the caps) and the rest of the hull wrapping their axis.
+std::vector<CurvedFeature> cylinderSides(const std::vector<Facet>& facets,
+                                         const std::vector<Eigen::Vector3d>& hv,
+                                         const std::vector<PlaneFeature>& planes, double total_area,
+                                         const SurfaceFeatureConfig& cfg) {
+  std::vector<CurvedFeature> sides;
   double rest_area = 0.0;
   for (const Facet& f : facets) rest_area += f.plane < 0 ? f.area : 0.0;
   if (rest_area >= cfg.min_curved_area_fraction * total_area) {
     const double max_axis_cos = std::sin(cfg.curved_normal_tolerance_deg * kDeg);
-    for (std::size_t i = 0; i < out.planes.size(); ++i) {
-      for (std::size_t j = i + 1; j < out.planes.size(); ++j) {
-        const PlaneFeature &p = out.planes[i], &q = out.planes[j];
+    for (std::size_t i = 0; i < planes.size(); ++i) {
+      for (std::size_t j = i + 1; j < planes.size(); ++j) {
+        const PlaneFeature &p = planes[i], &q = planes[j];
         if (p.normal.dot(q.normal) > -std::cos(5.0 * kDeg)) continue;
         const Eigen::Vector3d axis = (q.normal - p.normal).normalized();
         // Most of the remaining area must face sideways (rims and lips may not).
@@ -164,16 +169,22 @@ SurfaceFeatures extractSurfaceFeatures(const std::vector<Eigen::Vector3f>& point
         side.end_a = p.center;
         side.end_b = q.center;
         side.radius_m = mean;  // the side's hull vertices lie on its rim circles
-        out.curves.push_back(side);
+        sides.push_back(side);
       }
     }
   }
+  return sides;
+}
 
-  // Edges: non-parallel planes meeting along a line (hull vertices close to both planes).
+// Edges: non-parallel planes meeting along a line (hull vertices close to both planes).
+std::vector<CurvedFeature> planeEdges(const std::vector<Eigen::Vector3d>& hv,
+                                      const std::vector<PlaneFeature>& planes,
+                                      const SurfaceFeatureConfig& cfg) {
+  std::vector<CurvedFeature> edges;
   const double min_edge_cos = std::cos(cfg.min_edge_angle_deg * kDeg);
-  for (std::size_t i = 0; i < out.planes.size(); ++i) {
-    for (std::size_t j = i + 1; j < out.planes.size(); ++j) {
-      const PlaneFeature &p = out.planes[i], &q = out.planes[j];
+  for (std::size_t i = 0; i < planes.size(); ++i) {
+    for (std::size_t j = i + 1; j < planes.size(); ++j) {
+      const PlaneFeature &p = planes[i], &q = planes[j];
       if (std::abs(p.normal.dot(q.normal)) > min_edge_cos) continue;
       std::vector<Eigen::Vector3d> on_both;
       for (const auto& v : hv) {
@@ -206,9 +217,29 @@ SurfaceFeatures extractSurfaceFeatures(const std::vector<Eigen::Vector3f>& point
       edge.end_b = on_line + hi * dir;
       edge.center = 0.5 * (edge.end_a + edge.end_b);
       edge.radius_m = 0.0;
-      out.curves.push_back(edge);
+      edges.push_back(edge);
     }
   }
+  return edges;
+}
+
+}  // namespace
+
+SurfaceFeatures extractSurfaceFeatures(const std::vector<Eigen::Vector3f>& points,
+                                       const SurfaceFeatureConfig& cfg) {
+  SurfaceFeatures out;
+  if (points.size() < 4) return out;
+  const TriangleMesh hull = convexHull(points);
+  if (hull.vertices.size() < 4 || hull.triangles.empty()) return out;
+  std::vector<Eigen::Vector3d> hv;
+  hv.reserve(hull.vertices.size());
+  for (const auto& p : hull.vertices) hv.push_back(p.cast<double>());
+  double total_area = 0.0;
+  std::vector<Facet> facets = hullFacets(hull, hv, &total_area);
+  out.planes = growPlanes(&facets, hv, total_area, cfg);
+  out.curves = cylinderSides(facets, hv, out.planes, total_area, cfg);
+  const std::vector<CurvedFeature> edges = planeEdges(hv, out.planes, cfg);
+  out.curves.insert(out.curves.end(), edges.begin(), edges.end());
   return out;
 }
 
