@@ -10,7 +10,7 @@
 #   make vo-bench                the visual odometry benchmark, report in results/vo/
 #   make test-asan               every test built with ASan + UBSan in its own workspace, run by ctest
 #   make fuzz [FUZZ_RUNS=N]      libFuzzer (clang 14) on the input parsers, 1000000 runs per target
-#   make screenshots             README's rviz screenshots (docs/images) by the rviz_screenshots test
+#   make screenshots             the rviz screenshots of README and docs/running.md (docs/images) by the rviz_screenshots test
 #   make soak [SOAK_KEYFRAMES=N] a long run (tables revisited): time and memory per keyframe, plots
 .PHONY: demo test test-asan fuzz data bench bench-real live-bench vo-bench screenshots soak deps build lint clean help
 

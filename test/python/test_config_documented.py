@@ -1,6 +1,7 @@
 #!/usr/bin/python3
-"""README documents every key the loader reads (and no other), and cfg/SceneEstimator.cfg lists
-exactly the loader's reconfigurable settings, with the same ranges and defaults.
+"""docs/parameters.md documents every key the loader reads (and no other), and
+cfg/SceneEstimator.cfg lists exactly the loader's reconfigurable settings, with the same ranges
+and defaults.
 
   test_config_documented.py GEOFUSION_CONFIG_TOOL   (run in the devel environment)"""
 import os
@@ -23,9 +24,10 @@ def loader_keys():
     return rows
 
 
-def readme_keys():
-    """The keys of README's configuration tables: rows `| `key` | ...` under "## Configuration"."""
-    with open(os.path.join(SRC, 'README.md')) as f:
+def documented_keys():
+    """The keys of docs/parameters.md's configuration tables: rows `| `key` | ...` under
+    "## Configuration"."""
+    with open(os.path.join(SRC, 'docs', 'parameters.md')) as f:
         text = f.read()
     start = text.index('\n## Configuration')
     end = text.find('\n## ', start + 1)
@@ -34,11 +36,13 @@ def readme_keys():
 
 
 class ConfigDocumented(unittest.TestCase):
-    def test_readme_documents_every_key_and_no_other(self):
-        loaded, documented = set(loader_keys()), readme_keys()
-        self.assertGreater(len(documented), 50, 'README has no configuration table')
-        self.assertEqual(sorted(loaded - documented), [], 'keys the loader reads, missing from README')
-        self.assertEqual(sorted(documented - loaded), [], 'keys README documents, unknown to the loader')
+    def test_docs_document_every_key_and_no_other(self):
+        loaded, documented = set(loader_keys()), documented_keys()
+        self.assertGreater(len(documented), 50, 'docs/parameters.md has no configuration table')
+        self.assertEqual(sorted(loaded - documented), [],
+                         'keys the loader reads, missing from docs/parameters.md')
+        self.assertEqual(sorted(documented - loaded), [],
+                         'keys docs/parameters.md documents, unknown to the loader')
 
     def test_reconfigurable_settings_match_the_cfg(self):
         from geofusion.cfg import SceneEstimatorConfig as cfg

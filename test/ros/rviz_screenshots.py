@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Runs test/ros/rviz_screenshots.test under a virtual display (Xvfb): rviz with
 rviz/geofusion.rviz, the map panel plugin and the estimator on the demo recording; the checker
-takes the README's screenshots. GEOFUSION_SCREENSHOT_DIR: where they go (`make screenshots`
+takes the screenshots of README and docs/running.md. GEOFUSION_SCREENSHOT_DIR: where they go (`make screenshots`
 writes docs/images; default a temporary folder). Exit code: rostest's."""
 import os
 import subprocess
