@@ -154,88 +154,80 @@ double p95(const std::vector<double>& ms, std::size_t from, std::size_t to) {
       0.95);
 }
 
-}  // namespace
+// The options into `o`; throws on a missing or wrong one.
+void parse(int argc, char** argv, Options* o) {
+  CommandLine args;
+  args.value("--out", &o->out);
+  args.value("--keyframes", &o->keyframes);
+  args.value("--tables", &o->tables);
+  args.value("--visit", &o->visit);
+  args.value("--objects", &o->objects);
+  args.value("--seed", &o->seed);
+  args.value("--models", &o->models_dir);
+  args.value("--detector", &o->detector);
+  args.value("--bias-scale", &o->bias_scale);
+  o->config.declare(&args);
+  args.parse(argc, argv, usage);
+  if (o->out.empty()) throw std::runtime_error("--out needed");
+  if (o->keyframes < 1 || o->tables < 1 || o->visit < 1 || o->objects < 1)
+    throw std::runtime_error("--keyframes, --tables, --visit and --objects must be positive");
+  if (!(o->bias_scale >= 0.0)) throw std::runtime_error("--bias-scale must be >= 0");
+}
 
-int main(int argc, char** argv) {
-  Options o;
-  try {
-    CommandLine args;
-    args.value("--out", &o.out);
-    args.value("--keyframes", &o.keyframes);
-    args.value("--tables", &o.tables);
-    args.value("--visit", &o.visit);
-    args.value("--objects", &o.objects);
-    args.value("--seed", &o.seed);
-    args.value("--models", &o.models_dir);
-    args.value("--detector", &o.detector);
-    args.value("--bias-scale", &o.bias_scale);
-    o.config.declare(&args);
-    args.parse(argc, argv, usage);
-    if (o.out.empty()) throw std::runtime_error("--out needed");
-    if (o.keyframes < 1 || o.tables < 1 || o.visit < 1 || o.objects < 1)
-      throw std::runtime_error("--keyframes, --tables, --visit and --objects must be positive");
-    if (!(o.bias_scale >= 0.0)) throw std::runtime_error("--bias-scale must be >= 0");
-  } catch (const std::exception& e) {
-    std::cerr << "soak_benchmark: " << e.what() << "\n";
-    usage();
-    return 2;
-  }
-  GeoFusionConfig config;
-  if (!o.config.apply("soak_benchmark", &config)) return 2;
-  std::ofstream csv(o.out);
-  if (!csv) {
-    std::cerr << "soak_benchmark: cannot write " << o.out << "\n";
-    return 1;
-  }
-
-  ModelSet models;
+// The YCB-Video models of o.models_dir, else the built-in primitives (and the output says so);
+// true for the YCB-Video models.
+bool loadModels(const Options& o, const GeoFusionConfig& config, ModelSet* models) {
   std::vector<std::string> errors;
   const bool ycb =
       ModelSet::load(requirePackageDir("soak_benchmark") + "/config/models/ycb_video.yaml",
-                     o.models_dir, &models, &errors, config.model_set.surface_features) &&
-      models.size() > 0;
+                     o.models_dir, models, &errors, config.model_set.surface_features) &&
+      models->size() > 0;
   if (!ycb) {
-    models = ModelSet::builtinPrimitives();
+    *models = ModelSet::builtinPrimitives();
     std::printf("YCB-Video models not found in %s: using the built-in primitives\n",
                 o.models_dir.c_str());
   }
-  SuiteSpec suite;
-  suiteByName("bench", &suite);
-  if (!DetectorModel::byName(o.detector, &suite.detector)) {
-    std::cerr << "soak_benchmark: unknown --detector " << o.detector << "\n";
-    return 2;
-  }
-  scalePersistentErrors(&suite.detector.persistence, o.bias_scale);
-  std::vector<ClutterScene> scenes(static_cast<std::size_t>(o.tables));
+  return ycb;
+}
+
+// The tables' scenes, settled. False, having said why, when one cannot be made.
+bool makeScenes(const Options& o, const SuiteSpec& suite, const ModelSet& models,
+                std::vector<ClutterScene>* scenes) {
+  scenes->resize(static_cast<std::size_t>(o.tables));
   for (int t = 0; t < o.tables; ++t) {
     SceneSpec spec{"soak_table_" + std::to_string(t), o.seed + 17 * static_cast<unsigned>(t),
                    o.objects};
     unsigned used = 0;
     std::string why;
-    if (!makeSuiteScene(suite, spec, models, &scenes[static_cast<std::size_t>(t)], &used, &why)) {
+    if (!makeSuiteScene(suite, spec, models, &(*scenes)[static_cast<std::size_t>(t)], &used,
+                        &why)) {
       std::cerr << "soak_benchmark: table " << t << ": " << why << "\n";
-      return 1;
+      return false;
     }
   }
-  const std::vector<RunFrame> run = makeRun(o, suite, scenes);
-  const PinholeIntrinsics K;
-  std::vector<std::unique_ptr<SequenceRenderer>> renderers;
-  for (const auto& scene : scenes)
-    renderers.push_back(std::make_unique<SequenceRenderer>(scene, K));
-  std::printf(
-      "soak: %zu keyframes, %d tables of %d %s objects, visits of %d keyframes in turn; method %s\n"
-      "detector: %s, persistent errors x %.2f\nconfiguration: %s\n",
-      run.size(), o.tables, o.objects, ycb ? "YCB-Video" : "primitive", o.visit,
-      toString(config.estimator.method), o.detector.c_str(), o.bias_scale,
-      configDiff(config).c_str());
+  return true;
+}
 
+/// What the run measured.
+struct SoakRecord {
+  std::vector<double> total_ms, rss_mb;  ///< per keyframe
+  int relocalisations = 0;
+  double wall_s = 0.0;  ///< rendering included
+};
+
+// The run through the estimator, every keyframe rendered on the fly; per keyframe its time by
+// stage and the resident memory into the CSV and `record`. Returns the final map.
+KeyframeResult runKeyframes(const Options& o, const GeoFusionConfig& config, const SuiteSpec& suite,
+                            const ModelSet& models, const std::vector<RunFrame>& run,
+                            const std::vector<std::unique_ptr<SequenceRenderer>>& renderers,
+                            const PinholeIntrinsics& K, std::ostream* csv, SoakRecord* record) {
   SceneEstimator estimator(models, config.estimator);
   std::mt19937 rng(o.seed + 2000);
-  csv << "keyframe,table,visit,detections,objects,tentative,consistency_ms,association_ms,"
-         "lifecycle_ms,stage_one_ms,"
-         "relations_ms,stage_two_ms,total_ms,rss_mb,relocalised\n";
-  std::vector<double> total_ms, rss_mb;
-  int relocalisations = 0;
+  *csv << "keyframe,table,visit,detections,objects,tentative,consistency_ms,association_ms,"
+          "lifecycle_ms,stage_one_ms,"
+          "relations_ms,stage_two_ms,total_ms,rss_mb,relocalised\n";
+  std::vector<double>& total_ms = record->total_ms;
+  std::vector<double>& rss_mb = record->rss_mb;
   const auto start = std::chrono::steady_clock::now();
   for (std::size_t k = 0; k < run.size(); ++k) {
     const RunFrame& f = run[k];
@@ -244,24 +236,27 @@ int main(int argc, char** argv) {
     const KeyframeResult r = estimator.addKeyframe(makeKeyframe(f.map_pose, frame, K));
     total_ms.push_back(r.timings.total_ms);
     rss_mb.push_back(residentMb());
-    csv << k << ',' << f.table << ',' << f.visit << ',' << frame.detections.size() << ','
-        << r.objects.size() << ',' << r.tentative.size() << ',' << r.timings.consistency_ms << ','
-        << r.timings.association_ms << ',' << r.timings.lifecycle_ms << ','
-        << r.timings.stage_one_ms << ',' << r.timings.relations_ms << ',' << r.timings.stage_two_ms
-        << ',' << r.timings.total_ms << ',' << rss_mb.back() << ','
-        << (r.relocalisation.applied ? 1 : 0) << '\n';
-    relocalisations += r.relocalisation.applied;
+    *csv << k << ',' << f.table << ',' << f.visit << ',' << frame.detections.size() << ','
+         << r.objects.size() << ',' << r.tentative.size() << ',' << r.timings.consistency_ms << ','
+         << r.timings.association_ms << ',' << r.timings.lifecycle_ms << ','
+         << r.timings.stage_one_ms << ',' << r.timings.relations_ms << ',' << r.timings.stage_two_ms
+         << ',' << r.timings.total_ms << ',' << rss_mb.back() << ','
+         << (r.relocalisation.applied ? 1 : 0) << '\n';
+    record->relocalisations += r.relocalisation.applied;
     if ((k + 1) % 100 == 0) {
       std::printf("  keyframe %zu: %zu objects, p95 of the last 100 %.1f ms, %.0f MB\n", k + 1,
                   r.objects.size(), p95(total_ms, k + 1 - 100, k + 1), rss_mb.back());
       std::fflush(stdout);
     }
   }
-  const KeyframeResult final = estimator.finish();
-  const double wall_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  KeyframeResult final = estimator.finish();
+  record->wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return final;
+}
 
-  // The final map against each table's objects (placed in the map).
+// The final map against each table's objects (placed in the map).
+void printMapScores(const Options& o, const std::vector<ClutterScene>& scenes,
+                    const KeyframeResult& final, int relocalisations) {
   std::printf("final map: %zu objects; the camera relocalised against the map %d times\n",
               final.objects.size(), relocalisations);
   for (int t = 0; t < o.tables; ++t) {
@@ -280,6 +275,12 @@ int main(int argc, char** argv) {
         1000 * s.mean_adds_m, aligned.true_positives, aligned.false_positives,
         1000 * aligned.mean_adds_m);
   }
+}
+
+// The time a keyframe and the memory early in the run and at its end.
+void printTimes(const Options& o, const SoakRecord& record) {
+  const std::vector<double>& total_ms = record.total_ms;
+  const std::vector<double>& rss_mb = record.rss_mb;
   const std::size_t n = total_ms.size();
   const std::size_t early_from = std::min<std::size_t>(100, n),
                     early_to = std::min<std::size_t>(200, n);
@@ -288,10 +289,59 @@ int main(int argc, char** argv) {
       "total %.0f s for %zu keyframes (rendering included)\n",
       p95(total_ms, early_from, early_to), early_from, early_to,
       p95(total_ms, n - std::min<std::size_t>(100, n), n), n - std::min<std::size_t>(100, n), n,
-      wall_s, n);
+      record.wall_s, n);
   std::printf("memory: %.0f MB at keyframe %zu, %.0f MB at the end\n",
               rss_mb[std::min<std::size_t>(199, n - 1)], std::min<std::size_t>(200, n),
               rss_mb.back());
   std::printf("per keyframe in %s\n", o.out.c_str());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  try {
+    parse(argc, argv, &o);
+  } catch (const std::exception& e) {
+    std::cerr << "soak_benchmark: " << e.what() << "\n";
+    usage();
+    return 2;
+  }
+  GeoFusionConfig config;
+  if (!o.config.apply("soak_benchmark", &config)) return 2;
+  std::ofstream csv(o.out);
+  if (!csv) {
+    std::cerr << "soak_benchmark: cannot write " << o.out << "\n";
+    return 1;
+  }
+
+  ModelSet models;
+  const bool ycb = loadModels(o, config, &models);
+  SuiteSpec suite;
+  suiteByName("bench", &suite);
+  if (!DetectorModel::byName(o.detector, &suite.detector)) {
+    std::cerr << "soak_benchmark: unknown --detector " << o.detector << "\n";
+    return 2;
+  }
+  scalePersistentErrors(&suite.detector.persistence, o.bias_scale);
+  std::vector<ClutterScene> scenes;
+  if (!makeScenes(o, suite, models, &scenes)) return 1;
+  const std::vector<RunFrame> run = makeRun(o, suite, scenes);
+  const PinholeIntrinsics K;
+  std::vector<std::unique_ptr<SequenceRenderer>> renderers;
+  for (const auto& scene : scenes)
+    renderers.push_back(std::make_unique<SequenceRenderer>(scene, K));
+  std::printf(
+      "soak: %zu keyframes, %d tables of %d %s objects, visits of %d keyframes in turn; method %s\n"
+      "detector: %s, persistent errors x %.2f\nconfiguration: %s\n",
+      run.size(), o.tables, o.objects, ycb ? "YCB-Video" : "primitive", o.visit,
+      toString(config.estimator.method), o.detector.c_str(), o.bias_scale,
+      configDiff(config).c_str());
+
+  SoakRecord record;
+  const KeyframeResult final =
+      runKeyframes(o, config, suite, models, run, renderers, K, &csv, &record);
+  printMapScores(o, scenes, final, record.relocalisations);
+  printTimes(o, record);
   return 0;
 }

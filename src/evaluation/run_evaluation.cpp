@@ -607,47 +607,44 @@ std::vector<double> scaled(const std::vector<double>& v, double k) {
   return out;
 }
 
-}  // namespace
-
-bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::string* error) {
+// The ground truth's boxes, COCO's annotations.
+nlohmann::json annotationsJson(const RunEvaluation& e) {
   using nlohmann::json;
-  json j;
-  j["format"] = "geofusion_evaluation_v1";
-  j["scene"] = e.scene;
-  j["method"] = e.method;
-  j["config"] = e.config_yaml.empty() ? nlohmann::json(nullptr) : jsonOf(YAML::Load(e.config_yaml));
-  j["image_size"] = {e.image_width, e.image_height};
-  j["categories"] = json::array();
-  for (const auto& c : e.categories)
-    j["categories"].push_back({{"id", c.first}, {"name", c.second}});
-  j["images"] = json::array();
-  for (const auto& i : e.images) j["images"].push_back({{"id", i.first}, {"stamp", i.second}});
-  j["unmatched_keyframes"] = e.unmatched_keyframes;
-  j["annotations"] = json::array();
+  json out = json::array();
   for (const GroundTruthBox& g : e.ground_truth) {
-    j["annotations"].push_back(
-        {{"id", g.id},
-         {"image_id", g.image},
-         {"category_id", g.class_id},
-         {"bbox", boxJson(g.box)},
-         {"area", g.box.width() * g.box.height()},
-         {"iscrowd", g.crowd ? 1 : 0},
-         {"mask_bbox", g.mask_box.empty() ? json(nullptr) : boxJson(g.mask_box)},
-         {"object", g.object},
-         {"visible_fraction", g.visible_fraction}});
+    out.push_back({{"id", g.id},
+                   {"image_id", g.image},
+                   {"category_id", g.class_id},
+                   {"bbox", boxJson(g.box)},
+                   {"area", g.box.width() * g.box.height()},
+                   {"iscrowd", g.crowd ? 1 : 0},
+                   {"mask_bbox", g.mask_box.empty() ? json(nullptr) : boxJson(g.mask_box)},
+                   {"object", g.object},
+                   {"visible_fraction", g.visible_fraction}});
   }
-  j["detections"] = json::array();
+  return out;
+}
+
+nlohmann::json detectionsJson(const RunEvaluation& e) {
+  using nlohmann::json;
+  json out = json::array();
   for (const DetectionBox& d : e.detections) {
     json adds = json::object();
     for (const auto& a : d.adds_m) adds[std::to_string(a.first)] = a.second;
-    j["detections"].push_back({{"id", d.id},
-                               {"image_id", d.image},
-                               {"category_id", d.class_id},
-                               {"bbox", boxJson(d.box)},
-                               {"score", d.score},
-                               {"object_id", d.object_id},
-                               {"adds_m", adds}});
+    out.push_back({{"id", d.id},
+                   {"image_id", d.image},
+                   {"category_id", d.class_id},
+                   {"bbox", boxJson(d.box)},
+                   {"score", d.score},
+                   {"object_id", d.object_id},
+                   {"adds_m", adds}});
   }
+  return out;
+}
+
+// The contacts of the final map against the true ones, by kind (null when not evaluated).
+nlohmann::json contactCountsJson(const RunEvaluation& e) {
+  using nlohmann::json;
   json contacts = nullptr;
   if (e.has_contacts) {
     contacts = {{"true", e.true_contacts},
@@ -663,18 +660,12 @@ bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::s
           {"true", n.truth}, {"estimated", n.estimated}, {"correct", n.correct}};
     }
   }
-  j["final_map"] = {{"objects", e.map_objects},
-                    {"matched", e.map_matched},
-                    {"true_objects", e.true_objects},
-                    {"adds_m", e.map_adds_m},
-                    {"alignment_rmse_m", e.alignment_rmse_m},
-                    {"persistent_phantoms", e.persistent_phantoms},
-                    {"surviving_phantoms", e.surviving_phantoms},
-                    {"persistent_swaps", e.persistent_swaps},
-                    {"surviving_swaps", e.surviving_swaps},
-                    {"contacts", contacts},
-                    {"penetration_mm", scaled(e.penetration_m, 1000.0)},
-                    {"gap_mm", scaled(e.gap_m, 1000.0)}};
+  return contacts;
+}
+
+// Each true object's life in the map, and the totals (null when not evaluated).
+nlohmann::json lifecycleJson(const RunEvaluation& e) {
+  using nlohmann::json;
   json lifecycle = nullptr;
   if (e.has_lifecycle) {
     json objects = json::array();
@@ -702,25 +693,29 @@ bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::s
     lifecycle = {{"objects", objects},   {"lost", lost},     {"flip_flops", returns},
                  {"removals", removals}, {"ghosts", ghosts}, {"removal_latencies", latencies}};
   }
-  j["lifecycle"] = lifecycle;
-  j["trajectory"] = {{"ate_rmse_m", e.alignment_rmse_m},
-                     {"odometry_ate_rmse_m", e.odometry_ate_rmse_m}};
-  const EvaluationConfig& c = e.evaluation_config;
-  j["evaluation_config"] = {{"min_visible_fraction", c.min_visible_fraction},
-                            {"match_max_adds_m", c.match_max_adds_m},
-                            {"touch_distance_m", c.touch_distance_m},
-                            {"adds_min_iou", c.adds_min_iou},
-                            {"stamp_tolerance_s", c.stamp_tolerance_s},
-                            {"lifecycle_match_m", c.lifecycle_match_m},
-                            {"well_seen_min_keyframes", c.well_seen_min_keyframes},
-                            {"well_seen_min_visible", c.well_seen_min_visible},
-                            {"lost_absence_keyframes", c.lost_absence_keyframes},
-                            {"persistent_min_keyframes", c.persistent_min_keyframes},
-                            {"phantom_match_m", c.phantom_match_m}};
-  json timings = json::object();
+  return lifecycle;
+}
+
+nlohmann::json evaluationConfigJson(const EvaluationConfig& c) {
+  return {{"min_visible_fraction", c.min_visible_fraction},
+          {"match_max_adds_m", c.match_max_adds_m},
+          {"touch_distance_m", c.touch_distance_m},
+          {"adds_min_iou", c.adds_min_iou},
+          {"stamp_tolerance_s", c.stamp_tolerance_s},
+          {"lifecycle_match_m", c.lifecycle_match_m},
+          {"well_seen_min_keyframes", c.well_seen_min_keyframes},
+          {"well_seen_min_visible", c.well_seen_min_visible},
+          {"lost_absence_keyframes", c.lost_absence_keyframes},
+          {"persistent_min_keyframes", c.persistent_min_keyframes},
+          {"phantom_match_m", c.phantom_match_m}};
+}
+
+// Each stage's time, keyframe by keyframe.
+nlohmann::json timingsJson(const std::vector<StageTimings>& keyframes) {
+  nlohmann::json timings = nlohmann::json::object();
   auto series = [&](const char* name, double StageTimings::*field) {
     std::vector<double> v;
-    for (const StageTimings& t : e.timings) v.push_back(t.*field);
+    for (const StageTimings& t : keyframes) v.push_back(t.*field);
     timings[name] = v;
   };
   series("consistency", &StageTimings::consistency_ms);
@@ -730,41 +725,82 @@ bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::s
   series("relations", &StageTimings::relations_ms);
   series("stage_two", &StageTimings::stage_two_ms);
   series("total", &StageTimings::total_ms);
-  j["timings_ms"] = timings;
+  return timings;
+}
+
+nlohmann::json graphObjectsJson(const std::vector<GraphObject>& list, bool estimated) {
+  using nlohmann::json;
+  json out = json::array();
+  for (const GraphObject& o : list) {
+    json x = {{estimated ? "id" : "index", o.id},
+              {"class_name", o.class_name},
+              {"xy", {o.position.x(), o.position.y()}},
+              {"z", o.position.z()}};
+    if (estimated) x["match"] = o.match;
+    out.push_back(x);
+  }
+  return out;
+}
+
+nlohmann::json graphContactsJson(const std::vector<GraphContact>& list) {
+  using nlohmann::json;
+  json out = json::array();
+  for (const GraphContact& c : list) {
+    out.push_back({{"a", c.a},
+                   {"b", c.b},
+                   {"type", c.type},
+                   {"kind", c.kind},
+                   {"support", c.kind == "support"},
+                   {"correct", c.correct}});
+  }
+  return out;
+}
+
+}  // namespace
+
+bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::string* error) {
+  using nlohmann::json;
+  json j;
+  j["format"] = "geofusion_evaluation_v1";
+  j["scene"] = e.scene;
+  j["method"] = e.method;
+  j["config"] = e.config_yaml.empty() ? nlohmann::json(nullptr) : jsonOf(YAML::Load(e.config_yaml));
+  j["image_size"] = {e.image_width, e.image_height};
+  j["categories"] = json::array();
+  for (const auto& c : e.categories)
+    j["categories"].push_back({{"id", c.first}, {"name", c.second}});
+  j["images"] = json::array();
+  for (const auto& i : e.images) j["images"].push_back({{"id", i.first}, {"stamp", i.second}});
+  j["unmatched_keyframes"] = e.unmatched_keyframes;
+  j["annotations"] = annotationsJson(e);
+  j["detections"] = detectionsJson(e);
+  j["final_map"] = {{"objects", e.map_objects},
+                    {"matched", e.map_matched},
+                    {"true_objects", e.true_objects},
+                    {"adds_m", e.map_adds_m},
+                    {"alignment_rmse_m", e.alignment_rmse_m},
+                    {"persistent_phantoms", e.persistent_phantoms},
+                    {"surviving_phantoms", e.surviving_phantoms},
+                    {"persistent_swaps", e.persistent_swaps},
+                    {"surviving_swaps", e.surviving_swaps},
+                    {"contacts", contactCountsJson(e)},
+                    {"penetration_mm", scaled(e.penetration_m, 1000.0)},
+                    {"gap_mm", scaled(e.gap_m, 1000.0)}};
+  j["lifecycle"] = lifecycleJson(e);
+  j["trajectory"] = {{"ate_rmse_m", e.alignment_rmse_m},
+                     {"odometry_ate_rmse_m", e.odometry_ate_rmse_m}};
+  j["evaluation_config"] = evaluationConfigJson(e.evaluation_config);
+  j["timings_ms"] = timingsJson(e.timings);
   j["final_solve_ms"] = e.final_solve.total_ms;
   j["warnings"] = e.warnings;
   j["recording_duration_s"] = e.recording_duration_s;
   j["wall_time_s"] = e.wall_time_s;
   j["realtime_factor"] = e.recording_duration_s > 0 ? e.wall_time_s / e.recording_duration_s : 0.0;
   j["peak_rss_mb"] = e.peak_rss_mb;
-  auto objectsJson = [](const std::vector<GraphObject>& list, bool estimated) {
-    json out = json::array();
-    for (const GraphObject& o : list) {
-      json x = {{estimated ? "id" : "index", o.id},
-                {"class_name", o.class_name},
-                {"xy", {o.position.x(), o.position.y()}},
-                {"z", o.position.z()}};
-      if (estimated) x["match"] = o.match;
-      out.push_back(x);
-    }
-    return out;
-  };
-  auto contactsJson = [](const std::vector<GraphContact>& list) {
-    json out = json::array();
-    for (const GraphContact& c : list) {
-      out.push_back({{"a", c.a},
-                     {"b", c.b},
-                     {"type", c.type},
-                     {"kind", c.kind},
-                     {"support", c.kind == "support"},
-                     {"correct", c.correct}});
-    }
-    return out;
-  };
-  j["contact_graph"] = {{"true_objects", objectsJson(e.graph_true_objects, false)},
-                        {"true_contacts", contactsJson(e.graph_true_contacts)},
-                        {"estimated_objects", objectsJson(e.graph_estimated_objects, true)},
-                        {"estimated_contacts", contactsJson(e.graph_estimated_contacts)}};
+  j["contact_graph"] = {{"true_objects", graphObjectsJson(e.graph_true_objects, false)},
+                        {"true_contacts", graphContactsJson(e.graph_true_contacts)},
+                        {"estimated_objects", graphObjectsJson(e.graph_estimated_objects, true)},
+                        {"estimated_contacts", graphContactsJson(e.graph_estimated_contacts)}};
   return writeFileAtomically(
       path,
       [&](const std::string& tmp) {

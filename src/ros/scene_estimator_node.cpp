@@ -23,6 +23,30 @@ namespace geofusion {
 
 SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
     : nh_(nh), pnh_(pnh), tf_listener_(tf_buffer_), diagnostics_(nh, pnh) {
+  readParameters();
+  models_ = loadNodeModelSet(config_);
+  const ModelSet& models = models_;
+  pipeline_ = std::make_unique<EstimatorPipeline>(
+      models, config_.estimator, config_.keyframes, config_.checks,
+      config_.background_enabled ? &config_.background : nullptr, config_.ingestion);
+  advertise();
+  startReconfigure();
+
+  diagnostics_.setHardwareID("geofusion");
+  diagnostics_.add("scene estimator", this, &SceneEstimatorNode::diagnose);
+  diagnostics_timer_ = pnh_.createWallTimer(
+      ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { diagnostics_.force_update(); });
+
+  startOdometry();
+  loadInitialMap();
+  startFrames();
+  ROS_INFO_STREAM("geofusion: scene estimator (" << method_name_ << ", " << models.size()
+                                                 << " classes from " << models.name()
+                                                 << ") in frame " << map_frame_);
+  publishEffectiveConfig(pnh_, config_);
+}
+
+void SceneEstimatorNode::readParameters() {
   pnh_.param<std::string>("map_frame", map_frame_, kMapFrame);
   pnh_.param<std::string>("odom_frame", odom_frame_, kOdomFrame);
   config_ = loadNodeConfig(pnh_, {"odometry", "odom_topic", "initial_map"});
@@ -49,13 +73,9 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   background_by_height_ = config_.node.background_colour == "height";
   object_frames_tolerance_s_ = config_.node.object_frames_tolerance_s;
   method_name_ = toString(config_.estimator.method);
+}
 
-  models_ = loadNodeModelSet(config_);
-  const ModelSet& models = models_;
-  pipeline_ = std::make_unique<EstimatorPipeline>(
-      models, config_.estimator, config_.keyframes, config_.checks,
-      config_.background_enabled ? &config_.background : nullptr, config_.ingestion);
-
+void SceneEstimatorNode::advertise() {
   map_pub_ = pnh_.advertise<geofusion::ObjectMap>("object_map", 1, true);
   markers_pub_ = pnh_.advertise<visualization_msgs::MarkerArray>("map_markers", 1, true);
   path_pub_ = pnh_.advertise<nav_msgs::Path>("trajectory", 1, true);
@@ -84,7 +104,9 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   save_srv_ = pnh_.advertiseService("save_map", &SceneEstimatorNode::onSave, this);
   load_srv_ = pnh_.advertiseService("load_map", &SceneEstimatorNode::onLoad, this);
   reset_srv_ = pnh_.advertiseService("reset", &SceneEstimatorNode::onReset, this);
+}
 
+void SceneEstimatorNode::startReconfigure() {
   reconfigure_ = std::make_unique<dynamic_reconfigure::Server<geofusion::SceneEstimatorConfig>>(
       reconfigure_mutex_, pnh_);
   {
@@ -99,12 +121,9 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
   }
   reconfigure_->setCallback(
       [this](geofusion::SceneEstimatorConfig& c, uint32_t level) { onReconfigure(c, level); });
+}
 
-  diagnostics_.setHardwareID("geofusion");
-  diagnostics_.add("scene estimator", this, &SceneEstimatorNode::diagnose);
-  diagnostics_timer_ = pnh_.createWallTimer(
-      ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { diagnostics_.force_update(); });
-
+void SceneEstimatorNode::startOdometry() {
   // Odometry samples on their own queue and thread, so that a frame waiting for its pose never
   // blocks their arrival.
   ros::NodeHandle odom_nh(nh_);
@@ -118,7 +137,9 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
                                                 << " (nav_msgs/Odometry) instead of TF's "
                                                 << odom_frame_ << " -> base");
   }
+}
 
+void SceneEstimatorNode::loadInitialMap() {
   // ~initial_map: continue a saved map after a restart; one that cannot be loaded stops the
   // start (a robot must not silently begin from nothing when told to resume).
   std::string initial_map;
@@ -130,7 +151,9 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
       throw std::runtime_error("~initial_map: " + message + "; not starting");
     ROS_INFO_STREAM("geofusion: " << message);
   }
+}
 
+void SceneEstimatorNode::startFrames() {
   const RgbdSubscriber::Config sub = RgbdSubscriber::configOf(pnh_, config_.input);
   queue_capacity_ = static_cast<std::size_t>(std::max(1, config_.input.frame_queue_size));
   frame_thread_ = std::thread([this] { processFrames(); });
@@ -140,10 +163,6 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
         enqueueFrame({depth, info, dets});
       },
       [this](const ros::Time& from, const ros::Time& to) { onTimeJump(from, to); });
-  ROS_INFO_STREAM("geofusion: scene estimator (" << method_name_ << ", " << models.size()
-                                                 << " classes from " << models.name()
-                                                 << ") in frame " << map_frame_);
-  publishEffectiveConfig(pnh_, config_);
 }
 
 SceneEstimatorNode::~SceneEstimatorNode() {

@@ -11,15 +11,20 @@
 #include <QLabel>
 #include <QLineEdit>
 #include <QPushButton>
+#include <QScrollBar>
 #include <QTableWidget>
 #include <QVBoxLayout>
 
+#include <algorithm>
 #include <cmath>
 
 namespace geofusion {
 namespace {
 
 constexpr const char* kDefaultTopic = "/scene_estimator/object_map";
+// Rows the tables show without scrolling: at least the first, at most the second.
+constexpr int kObjectRows[] = {6, 12};
+constexpr int kContactRows[] = {4, 8};
 
 QTableWidget* makeTable(const QStringList& headers, QWidget* parent) {
   auto* table = new QTableWidget(0, headers.size(), parent);
@@ -31,6 +36,15 @@ QTableWidget* makeTable(const QStringList& headers, QWidget* parent) {
   table->horizontalHeader()->setSectionResizeMode(QHeaderView::ResizeToContents);
   table->horizontalHeader()->setStretchLastSection(true);
   return table;
+}
+
+// A table as tall as its rows, between min_rows and max_rows of them (a scroll bar beyond): the
+// panel shows what there is at a glance and gives the rest of its height to the other table.
+void fitRows(QTableWidget* table, int min_rows, int max_rows) {
+  const int rows = std::clamp(table->rowCount(), min_rows, max_rows);
+  const int chrome = table->horizontalHeader()->sizeHint().height() + 2 * table->frameWidth() +
+                     table->horizontalScrollBar()->sizeHint().height();
+  table->setMinimumHeight(chrome + rows * table->verticalHeader()->defaultSectionSize());
 }
 
 void setRow(QTableWidget* table, int row, const QStringList& cells) {
@@ -67,10 +81,12 @@ MapPanel::MapPanel(QWidget* parent) : rviz::Panel(parent) {
   layout->addWidget(objects_, 3);
   layout->addWidget(new QLabel("Contacts"));
   layout->addWidget(contacts_, 2);
+  fitRows(objects_, kObjectRows[0], kObjectRows[1]);
+  fitRows(contacts_, kContactRows[0], kContactRows[1]);
   layout->addLayout(save_row);
   layout->addWidget(status_);
   setLayout(layout);
-  setMinimumWidth(440);  // the tables' columns readable in rviz's dock
+  setMinimumWidth(480);  // the tables' columns readable in rviz's dock
 
   connect(topic_, &QLineEdit::editingFinished, this, &MapPanel::subscribe);
   connect(objects_, &QTableWidget::itemSelectionChanged, this, &MapPanel::onObjectRowChanged);
@@ -138,6 +154,7 @@ void MapPanel::fillObjects() {
     }
   }
   if (!findObject(*map_, selected_)) objects_->clearSelection();
+  fitRows(objects_, kObjectRows[0], kObjectRows[1]);
   filling_ = false;
 }
 
@@ -149,13 +166,14 @@ void MapPanel::fillContacts() {
            {c.object_a == 0 ? "table" : QString::number(c.object_a), QString::number(c.object_b),
             QString::fromStdString(contactKindName(c.kind)),
             QString::fromStdString(contactTypeName(c.type)),
-            QString::number(1000.0 * c.distance_residual_m, 'f', 1)});
+            QString::number(std::round(1e4 * c.distance_residual_m) / 10.0 + 0.0, 'f', 1)});
     const bool involved = selected_ != 0 && (c.object_a == selected_ || c.object_b == selected_);
     for (int col = 0; col < contacts_->columnCount(); ++col)
       contacts_->item(row, col)->setBackground(involved ? QBrush(QColor(255, 230, 80, 120))
                                                         : QBrush());
     ++row;
   }
+  fitRows(contacts_, kContactRows[0], kContactRows[1]);
 }
 
 void MapPanel::onObjectRowChanged() {

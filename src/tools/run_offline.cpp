@@ -215,260 +215,275 @@ std::string noKeyframeReport(const Options& o, const rosbag::Bag& bag, const Sta
   return s.str();
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  using namespace geofusion;
-  Options opt;
-  try {
-    opt = parse(argc, argv);
-  } catch (const std::exception& e) {
-    std::cerr << "run_offline: " << e.what() << "\n";
-    usage();
-    return 2;
-  }
-  GeoFusionConfig config;
-  if (!opt.config.apply("run_offline", &config)) return 2;
-  if (opt.print_params) {
-    std::cout << configYaml(config);
-    return 0;
-  }
-  std::string error;
+// The output paths, checked before the run: false, having said why, when one cannot be written.
+bool checkOutputs(const Options& opt, std::string* error) {
   for (const std::string& out :
        {opt.out, opt.background, opt.save_map.empty() ? "" : opt.save_map + ".yaml"}) {
-    if (!out.empty() && !checkWritable(out, &error)) {
-      std::cerr << "run_offline: " << error << "; nothing was run\n";
-      return 1;
+    if (!out.empty() && !checkWritable(out, error)) {
+      std::cerr << "run_offline: " << *error << "; nothing was run\n";
+      return false;
     }
   }
-  if (!opt.quiet)
-    std::cerr << "run_offline: configuration (differences from the defaults):\n"
-              << configDiff(config) << "\n";
-  const Method method = config.estimator.method;
-  ModelSet models;
-  if (!loadModelSetOption("run_offline", config.model_set.name, config.model_set.dir, &models,
-                          config.model_set.surface_features))
-    return 1;
+  return true;
+}
 
-  ros::Time::init();  // the synchroniser stamps its events; no master needed
-  rosbag::Bag bag;
+bool openBag(const std::string& path, rosbag::Bag* bag) {
   try {
-    bag.open(opt.bag, rosbag::bagmode::Read);
+    bag->open(path, rosbag::bagmode::Read);
   } catch (const std::exception& e) {
-    std::cerr << "run_offline: cannot read " << opt.bag << ": " << e.what() << bagHint(opt.bag)
-              << "\n";
-    return 1;
+    std::cerr << "run_offline: cannot read " << path << ": " << e.what() << bagHint(path) << "\n";
+    return false;
   }
-  const auto start = std::chrono::steady_clock::now();
-  const BackgroundMapConfig& background_config = config.background;
-  EstimatorPipeline pipeline(models, config.estimator, config.keyframes, config.checks,
-                             opt.background.empty() ? nullptr : &background_config,
-                             config.ingestion);
-  // Every keyframe into the background, in order, whether it runs in a thread or not: a run
-  // repeats; its CPU time is measured all the same.
-  if (pipeline.background()) pipeline.background()->setWait(true);
-  if (!opt.initial_map.empty()) {
-    RunResults resumed;
-    if (!pipeline.loadMap(opt.initial_map, models, &resumed, &error)) {
-      std::cerr << "run_offline: --initial-map: " << error << "; nothing was run\n";
-      return 1;
-    }
-    std::cerr << "run_offline: continuing the map " << opt.initial_map << " ("
-              << resumed.final_map.objects.size() << " objects)\n";
-  }
-  std::map<std::int64_t, ModelClass> class_map;
-  if (!makeVisionClassMap(config.vision_msgs.class_map, models, &class_map, &error)) {
-    std::cerr << "run_offline: " << error << "; nothing was run\n";
-    return 1;
-  }
-  VisionDetectionConverter vision(std::move(class_map));
-  RunResults results;
-  results.method = toString(method);
-  results.config_yaml = configYaml(config);
-  results.source = opt.bag;
-  results.model_set = models.name();
+  return true;
+}
 
-  // Read the whole recording's TF first (an offline run may look anywhere in time), its odom ->
-  // base samples into the pipeline's timeline; then the frames through the node's synchroniser.
+// --initial-map: the saved map the run continues (none given: nothing to do).
+bool resumeInitialMap(const Options& opt, const geofusion::ModelSet& models,
+                      geofusion::EstimatorPipeline* pipeline, std::string* error) {
+  if (opt.initial_map.empty()) return true;
+  geofusion::RunResults resumed;
+  if (!pipeline->loadMap(opt.initial_map, models, &resumed, error)) {
+    std::cerr << "run_offline: --initial-map: " << *error << "; nothing was run\n";
+    return false;
+  }
+  std::cerr << "run_offline: continuing the map " << opt.initial_map << " ("
+            << resumed.final_map.objects.size() << " objects)\n";
+  return true;
+}
+
+/// What reading the recording keeps: the recording's TF, and each input's messages as read.
+struct BagReading {
+  explicit BagReading(const Options& o)
+      : topics{o.rgb_topic, o.depth_topic, o.info_topic, o.detections_topic},
+        stamps(topics.size()),
+        counts(topics.size(), 0) {}
+  std::vector<std::string> topics;  ///< rgb, depth, camera_info, detections
+  StampLog stamps;
+  std::vector<std::size_t> counts;  ///< messages read of each input
+  double newest_stamp_s = 0.0;
+  std::unique_ptr<tf2::BufferCore> tf;
+  int warned = 0;  ///< warnings printed (at most 5, of all kinds together)
+};
+
+// The whole recording's TF (an offline run may look anywhere in time), its odom -> base samples
+// into the pipeline's timeline.
+void readTransforms(const Options& opt, const rosbag::Bag& bag,
+                    geofusion::EstimatorPipeline* pipeline, BagReading* reading,
+                    geofusion::RunResults* results) {
+  using namespace geofusion;
+  rosbag::View all(bag);
+  results->recording_duration_s = (all.getEndTime() - all.getBeginTime()).toSec();
+  reading->tf = std::make_unique<tf2::BufferCore>(
+      ros::Duration(std::max(10.0, results->recording_duration_s + 10.0)));
+  pipeline->odometry() = OdometryTimeline(std::numeric_limits<double>::infinity());
+  for (const rosbag::MessageInstance& m :
+       rosbag::View(bag, rosbag::TopicQuery(std::vector<std::string>{"/tf", "/tf_static"}))) {
+    const auto msg = m.instantiate<tf2_msgs::TFMessage>();
+    if (!msg) continue;
+    const bool is_static = m.getTopic() == "/tf_static";
+    for (const auto& t : msg->transforms) {
+      try {
+        reading->tf->setTransform(t, "bag", is_static);
+      } catch (const std::exception& e) {
+        if (reading->warned++ < 5)
+          std::cerr << "run_offline: transform ignored: " << e.what() << "\n";
+        continue;
+      }
+      if (!is_static && t.header.frame_id == opt.odom_frame)
+        pipeline->odometry().add(t.header.stamp.toSec());
+    }
+  }
+}
+
+// One synchronised frame into the pipeline, its camera pose from the recording's TF; a keyframe
+// into the results.
+void processFrame(const Options& opt, const sensor_msgs::Image& depth,
+                  const sensor_msgs::CameraInfo& info, const geofusion::DetectionArray& dets,
+                  geofusion::EstimatorPipeline* pipeline, BagReading* reading,
+                  geofusion::RunResults* results) {
+  using namespace geofusion;
+  EstimatorPipeline::CameraPose pose;
+  try {
+    pose.T_odom_cam = tf2::transformToEigen(
+        reading->tf->lookupTransform(opt.odom_frame, dets.header.frame_id, dets.header.stamp));
+    pose.found = true;
+  } catch (const std::exception& e) {
+    pose.error = e.what();
+  }
+  KeyframeResult r;
+  const auto outcome = pipeline->process(depth, info, dets, pose, reading->newest_stamp_s, &r);
+  if (outcome == EstimatorPipeline::Outcome::kDropped) {
+    if (reading->warned++ < 5)
+      std::cerr << "run_offline: frame at " << dets.header.stamp
+                << " dropped: " << toString(pipeline->lastDrop())
+                << (pipeline->lastDrop() == FrameDrop::kNoOdometry ? ": " + pose.error : "")
+                << "\n";
+    return;
+  }
+  if (outcome != EstimatorPipeline::Outcome::kKeyframe) return;
+  results->keyframes.push_back(r);
+}
+
+// The recording's frames into the synchroniser, whose callback makes the keyframes (into
+// `results`); a progress bar unless --quiet.
+void readFrames(const Options& opt, const rosbag::Bag& bag,
+                geofusion::RgbdSubscriber::DetectionSync* sync,
+                geofusion::VisionDetectionConverter* vision, const geofusion::RunResults& results,
+                BagReading* reading, std::string* error) {
+  using namespace geofusion;
+  const std::vector<std::string>& topics = reading->topics;
+  rosbag::View view(bag, rosbag::TopicQuery(topics));
+  const std::size_t total = view.size();
+  std::size_t read = 0;
+  for (const rosbag::MessageInstance& m : view) {
+    ++read;
+    const std::size_t input = static_cast<std::size_t>(
+        std::find(topics.begin(), topics.end(), m.getTopic()) - topics.begin());
+    ros::Time stamp;
+    const std::size_t before = results.keyframes.size();
+    auto note = [&](const auto& msg) {
+      stamp = msg->header.stamp;
+      ++reading->counts[input];
+      reading->stamps.stamps[input].push_back(stamp.toSec());
+      reading->newest_stamp_s = std::max(reading->newest_stamp_s, stamp.toSec());
+    };
+    if (input == 0 || input == 1) {
+      auto msg = m.instantiate<sensor_msgs::Image>();
+      if (!msg) continue;
+      note(msg);
+      if (input == 0)
+        sync->add<0>(ros::MessageEvent<sensor_msgs::Image const>(msg, m.getTime()));
+      else
+        sync->add<1>(ros::MessageEvent<sensor_msgs::Image const>(msg, m.getTime()));
+    } else if (input == 2) {
+      auto msg = m.instantiate<sensor_msgs::CameraInfo>();
+      if (!msg) continue;
+      note(msg);
+      sync->add<2>(ros::MessageEvent<sensor_msgs::CameraInfo const>(msg, m.getTime()));
+    } else {
+      auto msg = m.getDataType() == kVisionDetectionsType
+                     ? fromVisionMsgs(m, vision, error)
+                     : m.instantiate<geofusion::DetectionArray>();
+      if (!msg) {
+        if (!error->empty() && reading->warned++ < 5)
+          std::cerr << "run_offline: detections at " << m.getTime() << " dropped: " << *error
+                    << "\n";
+        error->clear();
+        continue;
+      }
+      note(msg);
+      sync->add<3>(ros::MessageEvent<geofusion::DetectionArray const>(msg, m.getTime()));
+    }
+    if (!opt.quiet && results.keyframes.size() > before && results.keyframes.size() % 10 == 0) {
+      const int percent = static_cast<int>(100.0 * read / std::max<std::size_t>(1, total));
+      std::fprintf(stderr, "\r[%-40s] %3d%%  %zu keyframes, %zu objects",
+                   std::string(percent * 40 / 100, '#').c_str(), percent, results.keyframes.size(),
+                   results.keyframes.back().objects.size());
+    }
+  }
+}
+
+// Reads the recording into the pipeline: its whole TF first, then the frames through the node's
+// synchroniser. False, having said why, when the bag cannot be read.
+bool readBag(const Options& opt, const geofusion::GeoFusionConfig& config, const rosbag::Bag& bag,
+             geofusion::EstimatorPipeline* pipeline, geofusion::VisionDetectionConverter* vision,
+             geofusion::RunResults* results, BagReading* reading, std::string* error) {
+  using namespace geofusion;
   RgbdSubscriber::Config sync_config;
   sync_config.queue_size = config.input.queue_size;
   sync_config.max_interval_s = config.input.sync_max_interval_s;
   auto sync = RgbdSubscriber::makeDetectionSync(sync_config);
-  const std::vector<std::string> topics = {opt.rgb_topic, opt.depth_topic, opt.info_topic,
-                                           opt.detections_topic};
-  StampLog stamps(topics.size());
-  std::vector<std::size_t> counts(topics.size(), 0);
-  double newest_stamp_s = 0.0;
-  std::unique_ptr<tf2::BufferCore> tf;
-  int warned = 0;
   try {
-    rosbag::View all(bag);
-    results.recording_duration_s = (all.getEndTime() - all.getBeginTime()).toSec();
-    tf = std::make_unique<tf2::BufferCore>(
-        ros::Duration(std::max(10.0, results.recording_duration_s + 10.0)));
-    pipeline.odometry() = OdometryTimeline(std::numeric_limits<double>::infinity());
-    for (const rosbag::MessageInstance& m :
-         rosbag::View(bag, rosbag::TopicQuery(std::vector<std::string>{"/tf", "/tf_static"}))) {
-      const auto msg = m.instantiate<tf2_msgs::TFMessage>();
-      if (!msg) continue;
-      const bool is_static = m.getTopic() == "/tf_static";
-      for (const auto& t : msg->transforms) {
-        try {
-          tf->setTransform(t, "bag", is_static);
-        } catch (const std::exception& e) {
-          if (warned++ < 5) std::cerr << "run_offline: transform ignored: " << e.what() << "\n";
-          continue;
-        }
-        if (!is_static && t.header.frame_id == opt.odom_frame)
-          pipeline.odometry().add(t.header.stamp.toSec());
-      }
-    }
-
+    readTransforms(opt, bag, pipeline, reading, results);
     const boost::function<void(const sensor_msgs::ImageConstPtr&, const sensor_msgs::ImageConstPtr&,
                                const sensor_msgs::CameraInfoConstPtr&,
                                const geofusion::DetectionArrayConstPtr&)>
         on_frame = [&](const sensor_msgs::ImageConstPtr&, const sensor_msgs::ImageConstPtr& depth,
                        const sensor_msgs::CameraInfoConstPtr& info,
                        const geofusion::DetectionArrayConstPtr& dets) {
-          EstimatorPipeline::CameraPose pose;
-          try {
-            pose.T_odom_cam = tf2::transformToEigen(
-                tf->lookupTransform(opt.odom_frame, dets->header.frame_id, dets->header.stamp));
-            pose.found = true;
-          } catch (const std::exception& e) {
-            pose.error = e.what();
-          }
-          KeyframeResult r;
-          const auto outcome = pipeline.process(*depth, *info, *dets, pose, newest_stamp_s, &r);
-          if (outcome == EstimatorPipeline::Outcome::kDropped) {
-            if (warned++ < 5)
-              std::cerr << "run_offline: frame at " << dets->header.stamp
-                        << " dropped: " << toString(pipeline.lastDrop())
-                        << (pipeline.lastDrop() == FrameDrop::kNoOdometry ? ": " + pose.error : "")
-                        << "\n";
-            return;
-          }
-          if (outcome != EstimatorPipeline::Outcome::kKeyframe) return;
-          results.keyframes.push_back(r);
+          processFrame(opt, *depth, *info, *dets, pipeline, reading, results);
         };
     using boost::placeholders::_1, boost::placeholders::_2, boost::placeholders::_3,
         boost::placeholders::_4;
     sync->registerCallback(boost::bind(on_frame, _1, _2, _3, _4));
-
-    rosbag::View view(bag, rosbag::TopicQuery(topics));
-    const std::size_t total = view.size();
-    std::size_t read = 0;
-    for (const rosbag::MessageInstance& m : view) {
-      ++read;
-      const std::size_t input = static_cast<std::size_t>(
-          std::find(topics.begin(), topics.end(), m.getTopic()) - topics.begin());
-      ros::Time stamp;
-      const std::size_t before = results.keyframes.size();
-      auto note = [&](const auto& msg) {
-        stamp = msg->header.stamp;
-        ++counts[input];
-        stamps.stamps[input].push_back(stamp.toSec());
-        newest_stamp_s = std::max(newest_stamp_s, stamp.toSec());
-      };
-      if (input == 0 || input == 1) {
-        auto msg = m.instantiate<sensor_msgs::Image>();
-        if (!msg) continue;
-        note(msg);
-        if (input == 0)
-          sync->add<0>(ros::MessageEvent<sensor_msgs::Image const>(msg, m.getTime()));
-        else
-          sync->add<1>(ros::MessageEvent<sensor_msgs::Image const>(msg, m.getTime()));
-      } else if (input == 2) {
-        auto msg = m.instantiate<sensor_msgs::CameraInfo>();
-        if (!msg) continue;
-        note(msg);
-        sync->add<2>(ros::MessageEvent<sensor_msgs::CameraInfo const>(msg, m.getTime()));
-      } else {
-        auto msg = m.getDataType() == kVisionDetectionsType
-                       ? fromVisionMsgs(m, &vision, &error)
-                       : m.instantiate<geofusion::DetectionArray>();
-        if (!msg) {
-          if (!error.empty() && warned++ < 5)
-            std::cerr << "run_offline: detections at " << m.getTime() << " dropped: " << error
-                      << "\n";
-          error.clear();
-          continue;
-        }
-        note(msg);
-        sync->add<3>(ros::MessageEvent<geofusion::DetectionArray const>(msg, m.getTime()));
-      }
-      if (!opt.quiet && results.keyframes.size() > before && results.keyframes.size() % 10 == 0) {
-        const int percent = static_cast<int>(100.0 * read / std::max<std::size_t>(1, total));
-        std::fprintf(stderr, "\r[%-40s] %3d%%  %zu keyframes, %zu objects",
-                     std::string(percent * 40 / 100, '#').c_str(), percent,
-                     results.keyframes.size(), results.keyframes.back().objects.size());
-      }
-    }
+    readFrames(opt, bag, sync.get(), vision, *results, reading, error);
   } catch (const std::exception& e) {  // rosbag's and deserialisation's
     std::cerr << "\nrun_offline: cannot read " << opt.bag << ": " << e.what() << bagHint(opt.bag)
               << "; nothing written\n";
-    return 1;
+    return false;
   }
-  if (!opt.quiet) std::fprintf(stderr, "\n");
-  pipeline.setUnsynchronised(unsynchronisedFrames(counts, pipeline.framesSeen()));
-  if (results.keyframes.empty()) {
-    std::cerr << "run_offline: " << noKeyframeReport(opt, bag, stamps, pipeline, config)
-              << "\nrun_offline: nothing written\n";
-    return 1;
-  }
-  {
-    // The final solve and the pipeline's counts, with what only this run knows.
-    RunResults finished = pipeline.currentMap();
-    finished.method = std::move(results.method);
-    finished.config_yaml = std::move(results.config_yaml);
-    finished.source = std::move(results.source);
-    finished.model_set = std::move(results.model_set);
-    finished.recording_duration_s = results.recording_duration_s;
-    finished.keyframes = std::move(results.keyframes);
-    results = std::move(finished);
-  }
-  results.wall_time_s =
+  return true;
+}
+
+// The final solve and the pipeline's counts, with what only this run knows (its record, its wall
+// time since `start` and its peak memory).
+void finishResults(geofusion::EstimatorPipeline* pipeline,
+                   std::chrono::steady_clock::time_point start, geofusion::RunResults* results) {
+  geofusion::RunResults finished = pipeline->currentMap();
+  finished.method = std::move(results->method);
+  finished.config_yaml = std::move(results->config_yaml);
+  finished.source = std::move(results->source);
+  finished.model_set = std::move(results->model_set);
+  finished.recording_duration_s = results->recording_duration_s;
+  finished.keyframes = std::move(results->keyframes);
+  *results = std::move(finished);
+  results->wall_time_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   rusage usage{};
-  if (getrusage(RUSAGE_SELF, &usage) == 0) results.peak_rss_mb = usage.ru_maxrss / 1024.0;
+  if (getrusage(RUSAGE_SELF, &usage) == 0) results->peak_rss_mb = usage.ru_maxrss / 1024.0;
+}
+
+// The background, the results and the map of --save-map; `occupied`: the background's occupied
+// voxels. False, having said why, when one cannot be written.
+bool writeOutputs(const Options& opt, geofusion::EstimatorPipeline* pipeline,
+                  geofusion::RunResults* results, std::size_t* occupied, std::string* error) {
+  using namespace geofusion;
   // The background first: when the results (the run's record) cannot be written, it goes too.
-  std::size_t occupied = 0;
-  if (BackgroundWorker* background = pipeline.background()) {
+  if (BackgroundWorker* background = pipeline->background()) {
     bool written = false;
     background->withMap([&](BackgroundMap& map) {
-      written = map.writeBinary(opt.background, &error);
-      occupied = map.occupiedCentres().size();
+      written = map.writeBinary(opt.background, error);
+      *occupied = map.occupiedCentres().size();
     });
     if (!written) {
-      std::cerr << "run_offline: " << error << "; nothing written\n";
-      return 1;
+      std::cerr << "run_offline: " << *error << "; nothing written\n";
+      return false;
     }
-    results.has_background = true;
-    results.background = background->stats();
+    results->has_background = true;
+    results->background = background->stats();
   }
-  if (!writeRunResults(opt.out, results, &error)) {
-    if (pipeline.background()) std::remove(opt.background.c_str());
-    std::cerr << "run_offline: " << error << "; nothing written\n";
-    return 1;
+  if (!writeRunResults(opt.out, *results, error)) {
+    if (pipeline->background()) std::remove(opt.background.c_str());
+    std::cerr << "run_offline: " << *error << "; nothing written\n";
+    return false;
   }
   if (!opt.save_map.empty()) {
-    RunResults map = results;
+    RunResults map = *results;
     map.keyframes.clear();  // the map, not the run's record
     MapFiles files;
-    if (!pipeline.saveMap(opt.save_map, std::move(map), &files, &error)) {
-      std::cerr << "run_offline: --save-map: " << error << "\n";
-      return 1;
+    if (!pipeline->saveMap(opt.save_map, std::move(map), &files, error)) {
+      std::cerr << "run_offline: --save-map: " << *error << "\n";
+      return false;
     }
     std::printf("run_offline: map saved to %s%s%s\n", files.yaml.c_str(),
                 files.background.empty() ? "" : " and ", files.background.c_str());
   }
-  if (pipeline.background()) {
+  return true;
+}
+
+// What the run made: the background, keyframes and objects, its speed, the detections used.
+void printSummary(const Options& opt, const geofusion::GeoFusionConfig& config,
+                  const geofusion::VisionDetectionConverter& vision,
+                  const geofusion::RunResults& results, std::size_t occupied,
+                  geofusion::EstimatorPipeline* pipeline) {
+  using namespace geofusion;
+  if (pipeline->background()) {
     const BackgroundStats& b = results.background;
     std::printf(
         "run_offline: background OctoMap (%zu occupied voxels of %.0f mm) in %s; %zu keyframes "
         "inserted, %zu passed over (camera still), %.1f ms a keyframe amortised (insertions p50 "
         "%.1f, p95 %.1f, max %.1f ms CPU)\n",
-        occupied, 1000 * background_config.resolution_m, opt.background.c_str(), b.inserted,
+        occupied, 1000 * config.background.resolution_m, opt.background.c_str(), b.inserted,
         b.still, b.amortisedMs(), b.p50_ms, b.p95_ms, b.max_ms);
   }
   const double duration = results.recording_duration_s;
@@ -476,10 +491,10 @@ int main(int argc, char** argv) {
       "run_offline: %s on %s: %zu keyframes (%d synchronised frames, %s), %zu objects, %zu "
       "contacts; %.1f s for %.1f s of recording (real-time factor %.2f); results in %s\n",
       results.method.c_str(), opt.bag.c_str(), results.keyframes.size(), results.frames_seen,
-      pipeline.drops().summary().c_str(), results.final_map.objects.size(),
+      pipeline->drops().summary().c_str(), results.final_map.objects.size(),
       results.final_map.contacts.size(), results.wall_time_s, duration,
       duration > 0 ? results.wall_time_s / duration : 0.0, opt.out.c_str());
-  std::printf("run_offline: detections: %s\n", pipeline.tally().summary().c_str());
+  std::printf("run_offline: detections: %s\n", pipeline->tally().summary().c_str());
   std::printf("run_offline: objects removed: %s; relocalisation searched: %s\n",
               reasonsLine(removalsByReason(results)).c_str(),
               reasonsLine(relocalisationsByDecision(results)).c_str());
@@ -489,6 +504,14 @@ int main(int argc, char** argv) {
         vision.counts().messages, vision.counts().detections,
         vision.droppedSummary().empty() ? "" : "; dropped: ", vision.droppedSummary().c_str());
   }
+}
+
+// What the run's figures should not hide: keyframes over budget, detections beyond the cap,
+// detection warnings and failed optimisation stages.
+void printWarnings(const Options& opt, const geofusion::GeoFusionConfig& config,
+                   const geofusion::EstimatorPipeline& pipeline,
+                   const geofusion::RunResults& results) {
+  using namespace geofusion;
   if (results.keyframes_over_budget > 0) {
     std::cerr << "run_offline: warning: " << results.keyframes_over_budget << " of "
               << results.keyframes.size()
@@ -518,5 +541,74 @@ int main(int argc, char** argv) {
               << " optimisation stage(s) failed and their results were not used (`stages:` in "
               << opt.out << ")\n";
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace geofusion;
+  Options opt;
+  try {
+    opt = parse(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "run_offline: " << e.what() << "\n";
+    usage();
+    return 2;
+  }
+  GeoFusionConfig config;
+  if (!opt.config.apply("run_offline", &config)) return 2;
+  if (opt.print_params) {
+    std::cout << configYaml(config);
+    return 0;
+  }
+  std::string error;
+  if (!checkOutputs(opt, &error)) return 1;
+  if (!opt.quiet)
+    std::cerr << "run_offline: configuration (differences from the defaults):\n"
+              << configDiff(config) << "\n";
+  const Method method = config.estimator.method;
+  ModelSet models;
+  if (!loadModelSetOption("run_offline", config.model_set.name, config.model_set.dir, &models,
+                          config.model_set.surface_features))
+    return 1;
+
+  ros::Time::init();  // the synchroniser stamps its events; no master needed
+  rosbag::Bag bag;
+  if (!openBag(opt.bag, &bag)) return 1;
+  const auto start = std::chrono::steady_clock::now();
+  const BackgroundMapConfig& background_config = config.background;
+  EstimatorPipeline pipeline(models, config.estimator, config.keyframes, config.checks,
+                             opt.background.empty() ? nullptr : &background_config,
+                             config.ingestion);
+  // Every keyframe into the background, in order, whether it runs in a thread or not: a run
+  // repeats; its CPU time is measured all the same.
+  if (pipeline.background()) pipeline.background()->setWait(true);
+  if (!resumeInitialMap(opt, models, &pipeline, &error)) return 1;
+  std::map<std::int64_t, ModelClass> class_map;
+  if (!makeVisionClassMap(config.vision_msgs.class_map, models, &class_map, &error)) {
+    std::cerr << "run_offline: " << error << "; nothing was run\n";
+    return 1;
+  }
+  VisionDetectionConverter vision(std::move(class_map));
+  RunResults results;
+  results.method = toString(method);
+  results.config_yaml = configYaml(config);
+  results.source = opt.bag;
+  results.model_set = models.name();
+
+  BagReading reading(opt);
+  if (!readBag(opt, config, bag, &pipeline, &vision, &results, &reading, &error)) return 1;
+  if (!opt.quiet) std::fprintf(stderr, "\n");
+  pipeline.setUnsynchronised(unsynchronisedFrames(reading.counts, pipeline.framesSeen()));
+  if (results.keyframes.empty()) {
+    std::cerr << "run_offline: " << noKeyframeReport(opt, bag, reading.stamps, pipeline, config)
+              << "\nrun_offline: nothing written\n";
+    return 1;
+  }
+  finishResults(&pipeline, start, &results);
+  std::size_t occupied = 0;
+  if (!writeOutputs(opt, &pipeline, &results, &occupied, &error)) return 1;
+  printSummary(opt, config, vision, results, occupied, &pipeline);
+  printWarnings(opt, config, pipeline, results);
   return 0;
 }

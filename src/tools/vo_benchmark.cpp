@@ -66,6 +66,126 @@ Options parse(int argc, char** argv) {
   return o;
 }
 
+/// One synchronised set of the recording.
+struct Pending {
+  sensor_msgs::ImageConstPtr rgb, depth;
+  sensor_msgs::CameraInfoConstPtr info;
+};
+
+/// The odometry over the recording: the poses it tracked and its figures.
+struct VoRun {
+  geofusion::VisualOdometry vo;
+  std::vector<std::uint8_t> gray;  ///< the images converted, reused frame to frame
+  std::vector<float> depth;
+  std::vector<double> stamps, times, convert_times;
+  std::vector<Eigen::Isometry3d> poses;
+  int frames = 0, lost = 0, restarts = 0, keyframes = 0, unusable = 0;
+};
+
+// One synchronised set through the odometry.
+void trackFrame(const Options& opt, const Pending& set, VoRun* run, std::string* error) {
+  using namespace geofusion;
+  ++run->frames;
+  // The node's own work before tracking: the grey and metric depth images.
+  const auto c0 = std::chrono::steady_clock::now();
+  const bool converted =
+      toGray(*set.rgb, &run->gray, error) && depthToMetres(*set.depth, &run->depth);
+  run->convert_times.push_back(
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - c0).count());
+  if (!converted) {
+    ++run->unusable;
+    return;
+  }
+  const PinholeIntrinsics K = intrinsicsFromCameraInfo(*set.info);
+  GrayImageView g{run->gray.data(), static_cast<int>(set.rgb->width),
+                  static_cast<int>(set.rgb->height), 0};
+  DepthImageView d{run->depth.data(), static_cast<int>(set.depth->width),
+                   static_cast<int>(set.depth->height)};
+  const VoFrameResult r = run->vo.track(g, d, K, set.rgb->header.stamp.toSec());
+  run->times.push_back(r.time_ms);
+  run->keyframes += r.keyframe;
+  if (r.restarted && run->frames > 1) ++run->restarts;
+  if (!r.pose_valid) {
+    ++run->lost;
+    if (!opt.quiet)
+      std::cerr << "vo_benchmark: frame " << run->frames << " lost: " << r.problem << " ("
+                << r.features << " features, " << r.features_with_depth << " with depth, "
+                << r.matches << " matches)\n";
+    return;
+  }
+  run->stamps.push_back(set.rgb->header.stamp.toSec());
+  run->poses.push_back(r.T_odom_cam);
+}
+
+// The recording's images and camera info, made into sets by their stamps, through the odometry.
+void runOdometry(const Options& opt, const rosbag::Bag& bag, VoRun* run, std::string* error) {
+  std::map<uint64_t, Pending> pending;
+  rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{opt.rgb_topic, opt.depth_topic,
+                                                                     opt.info_topic}));
+  for (const rosbag::MessageInstance& m : view) {
+    uint64_t stamp = 0;
+    if (m.getTopic() == opt.info_topic) {
+      auto msg = m.instantiate<sensor_msgs::CameraInfo>();
+      if (!msg) continue;
+      stamp = msg->header.stamp.toNSec();
+      pending[stamp].info = msg;
+    } else {
+      auto msg = m.instantiate<sensor_msgs::Image>();
+      if (!msg) continue;
+      stamp = msg->header.stamp.toNSec();
+      (m.getTopic() == opt.rgb_topic ? pending[stamp].rgb : pending[stamp].depth) = msg;
+    }
+    Pending& p = pending[stamp];
+    if (!p.rgb || !p.depth || !p.info) continue;
+    const Pending set = p;
+    pending.erase(pending.begin(), pending.upper_bound(stamp));
+    trackFrame(opt, set, run, error);
+  }
+}
+
+nlohmann::json resultsJson(const Options& opt, const geofusion::GroundTruth& gt, const VoRun& run,
+                           const geofusion::TrajectoryErrors& e) {
+  using namespace geofusion;
+  nlohmann::json j;
+  j["format"] = "geofusion_vo_benchmark_v1";
+  j["scene"] = gt.scene_name;
+  j["suite"] = gt.suite;
+  j["bag"] = opt.bag;
+  j["frames"] = run.frames;
+  j["unusable_frames"] = run.unusable;
+  j["lost_frames"] = run.lost;
+  j["restarts"] = run.restarts;
+  j["keyframes"] = run.keyframes;
+  j["paired_poses"] = e.pairs;
+  j["path_length_m"] = e.length_m;
+  j["ate_rmse_m"] = e.ate_rmse_m;
+  j["ate_mean_m"] = e.ate_mean_m;
+  j["ate_max_m"] = e.ate_max_m;
+  j["rpe_delta_s"] = e.rpe_delta_s;
+  j["rpe_translation_rmse_m"] = e.rpe_translation_rmse_m;
+  j["rpe_rotation_rmse_deg"] = e.rpe_rotation_rmse_deg;
+  j["time_ms_median"] = percentile(run.times, 0.5);
+  j["convert_ms_median"] = percentile(run.convert_times, 0.5);
+  j["time_ms_p95"] = percentile(run.times, 0.95);
+  j["time_ms_max"] = percentile(run.times, 1.0);
+  j["opencv_threads"] = opt.threads;
+  return j;
+}
+
+void printSummary(const Options& opt, const geofusion::GroundTruth& gt, const VoRun& run,
+                  const geofusion::TrajectoryErrors& e, const std::string& stem) {
+  using namespace geofusion;
+  std::printf(
+      "vo_benchmark: %s: %d frames (%d lost, %d restarts, %d keyframes), path %.2f m; ATE RMSE "
+      "%.2f cm (mean %.2f, max %.2f); RPE over 1 s %.2f cm, %.2f deg; time per frame median "
+      "%.1f ms, p95 %.1f ms (%d OpenCV thread%s; image conversion %.1f ms more); %s_vo.tum, "
+      "%s_vo.json\n",
+      gt.scene_name.c_str(), run.frames, run.lost, run.restarts, run.keyframes, e.length_m,
+      100 * e.ate_rmse_m, 100 * e.ate_mean_m, 100 * e.ate_max_m, 100 * e.rpe_translation_rmse_m,
+      e.rpe_rotation_rmse_deg, percentile(run.times, 0.5), percentile(run.times, 0.95), opt.threads,
+      opt.threads == 1 ? "" : "s", percentile(run.convert_times, 0.5), stem.c_str(), stem.c_str());
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -96,113 +216,24 @@ int main(int argc, char** argv) {
     std::cerr << "vo_benchmark: cannot read " << opt.bag << ": " << e.what() << "\n";
     return 1;
   }
-  struct Pending {
-    sensor_msgs::ImageConstPtr rgb, depth;
-    sensor_msgs::CameraInfoConstPtr info;
-  };
-  std::map<uint64_t, Pending> pending;
-  rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{opt.rgb_topic, opt.depth_topic,
-                                                                     opt.info_topic}));
-  VisualOdometry vo;
-  std::vector<double> stamps, times, convert_times;
-  std::vector<Eigen::Isometry3d> poses;
-  int frames = 0, lost = 0, restarts = 0, keyframes = 0, unusable = 0;
-  std::vector<std::uint8_t> gray;
-  std::vector<float> depth;
-  for (const rosbag::MessageInstance& m : view) {
-    uint64_t stamp = 0;
-    if (m.getTopic() == opt.info_topic) {
-      auto msg = m.instantiate<sensor_msgs::CameraInfo>();
-      if (!msg) continue;
-      stamp = msg->header.stamp.toNSec();
-      pending[stamp].info = msg;
-    } else {
-      auto msg = m.instantiate<sensor_msgs::Image>();
-      if (!msg) continue;
-      stamp = msg->header.stamp.toNSec();
-      (m.getTopic() == opt.rgb_topic ? pending[stamp].rgb : pending[stamp].depth) = msg;
-    }
-    Pending& p = pending[stamp];
-    if (!p.rgb || !p.depth || !p.info) continue;
-    const Pending set = p;
-    pending.erase(pending.begin(), pending.upper_bound(stamp));
-    ++frames;
-    // The node's own work before tracking: the grey and metric depth images.
-    const auto c0 = std::chrono::steady_clock::now();
-    const bool converted = toGray(*set.rgb, &gray, &error) && depthToMetres(*set.depth, &depth);
-    convert_times.push_back(
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - c0).count());
-    if (!converted) {
-      ++unusable;
-      continue;
-    }
-    const PinholeIntrinsics K = intrinsicsFromCameraInfo(*set.info);
-    GrayImageView g{gray.data(), static_cast<int>(set.rgb->width),
-                    static_cast<int>(set.rgb->height), 0};
-    DepthImageView d{depth.data(), static_cast<int>(set.depth->width),
-                     static_cast<int>(set.depth->height)};
-    const VoFrameResult r = vo.track(g, d, K, set.rgb->header.stamp.toSec());
-    times.push_back(r.time_ms);
-    keyframes += r.keyframe;
-    if (r.restarted && frames > 1) ++restarts;
-    if (!r.pose_valid) {
-      ++lost;
-      if (!opt.quiet)
-        std::cerr << "vo_benchmark: frame " << frames << " lost: " << r.problem << " ("
-                  << r.features << " features, " << r.features_with_depth << " with depth, "
-                  << r.matches << " matches)\n";
-      continue;
-    }
-    stamps.push_back(set.rgb->header.stamp.toSec());
-    poses.push_back(r.T_odom_cam);
-  }
+  VoRun run;
+  runOdometry(opt, bag, &run, &error);
   std::vector<double> true_stamps;
   std::vector<Eigen::Isometry3d> truth;
   for (const GroundTruthFrame& f : gt.frames) {
     true_stamps.push_back(f.stamp_s);
     truth.push_back(f.T_map_optical);
   }
-  const TrajectoryErrors e = trajectoryErrors(stamps, poses, true_stamps, truth, 1.0);
+  const TrajectoryErrors e = trajectoryErrors(run.stamps, run.poses, true_stamps, truth, 1.0);
 
   std::filesystem::create_directories(opt.out_dir);
   const std::string stem = opt.out_dir + "/" + gt.scene_name;
-  if (!writeTum(stem + "_vo.tum", stamps, poses, &error) ||
+  if (!writeTum(stem + "_vo.tum", run.stamps, run.poses, &error) ||
       !writeTum(stem + "_truth.tum", true_stamps, truth, &error)) {
     std::cerr << "vo_benchmark: " << error << "\n";
     return 1;
   }
-  nlohmann::json j;
-  j["format"] = "geofusion_vo_benchmark_v1";
-  j["scene"] = gt.scene_name;
-  j["suite"] = gt.suite;
-  j["bag"] = opt.bag;
-  j["frames"] = frames;
-  j["unusable_frames"] = unusable;
-  j["lost_frames"] = lost;
-  j["restarts"] = restarts;
-  j["keyframes"] = keyframes;
-  j["paired_poses"] = e.pairs;
-  j["path_length_m"] = e.length_m;
-  j["ate_rmse_m"] = e.ate_rmse_m;
-  j["ate_mean_m"] = e.ate_mean_m;
-  j["ate_max_m"] = e.ate_max_m;
-  j["rpe_delta_s"] = e.rpe_delta_s;
-  j["rpe_translation_rmse_m"] = e.rpe_translation_rmse_m;
-  j["rpe_rotation_rmse_deg"] = e.rpe_rotation_rmse_deg;
-  j["time_ms_median"] = percentile(times, 0.5);
-  j["convert_ms_median"] = percentile(convert_times, 0.5);
-  j["time_ms_p95"] = percentile(times, 0.95);
-  j["time_ms_max"] = percentile(times, 1.0);
-  j["opencv_threads"] = opt.threads;
-  std::ofstream(stem + "_vo.json") << j.dump(2) << "\n";
-  std::printf(
-      "vo_benchmark: %s: %d frames (%d lost, %d restarts, %d keyframes), path %.2f m; ATE RMSE "
-      "%.2f cm (mean %.2f, max %.2f); RPE over 1 s %.2f cm, %.2f deg; time per frame median "
-      "%.1f ms, p95 %.1f ms (%d OpenCV thread%s; image conversion %.1f ms more); %s_vo.tum, "
-      "%s_vo.json\n",
-      gt.scene_name.c_str(), frames, lost, restarts, keyframes, e.length_m, 100 * e.ate_rmse_m,
-      100 * e.ate_mean_m, 100 * e.ate_max_m, 100 * e.rpe_translation_rmse_m,
-      e.rpe_rotation_rmse_deg, percentile(times, 0.5), percentile(times, 0.95), opt.threads,
-      opt.threads == 1 ? "" : "s", percentile(convert_times, 0.5), stem.c_str(), stem.c_str());
+  std::ofstream(stem + "_vo.json") << resultsJson(opt, gt, run, e).dump(2) << "\n";
+  printSummary(opt, gt, run, e, stem);
   return 0;
 }

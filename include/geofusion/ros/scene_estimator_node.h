@@ -41,6 +41,13 @@ class SceneEstimatorNode {
   ~SceneEstimatorNode();
 
  private:
+  // The constructor's steps, in its order.
+  void readParameters();    // frames, configuration, where odometry comes from; throws
+  void advertise();         // publishers, services, the background's publication
+  void startReconfigure();  // dynamic_reconfigure, from the loaded configuration
+  void startOdometry();     // odometry samples on their own queue and thread
+  void loadInitialMap();    // ~initial_map; throws when it cannot be loaded
+  void startFrames();       // the frame thread and the subscriber
   /// A synchronised set, from the subscriber's callback to the frame thread.
   struct FrameSet {
     sensor_msgs::ImageConstPtr depth;
