@@ -26,6 +26,7 @@ ALLOWED = {
     "simulation": set(RUNTIME) | {"simulation"},
     "evaluation": set(RUNTIME) | {"simulation", "evaluation"},
     "ros": set(RUNTIME) | {"ros"},
+    "python": set(RUNTIME) | {"python"},
 }
 # Folders of files that belong to a module, as (path prefix, module). Tools, benchmarks and tests
 # may include any module (tests make their inputs with the simulation); only the ROS rule holds
