@@ -57,6 +57,12 @@ env -i HOME="$HOME" PATH=/usr/bin:/bin ROS_HOME="$work/ros" bash -c '
 assert e[\"final_map\"][\"matched\"] > 0, e[\"final_map\"]; \
 assert e[\"config\"][\"method\"] == \"geofusion\"; \
 print(\"check_install: run from the install space: %d objects matched, config recorded\" % e[\"final_map\"][\"matched\"])" "$work/eval.json"
+  # The Python module from the install space, with the installed configuration template.
+  /usr/bin/python3 -c "import sys, geofusion.core as gf; \
+assert gf.__file__.startswith(sys.argv[1]), gf.__file__; \
+e = gf.SceneEstimator(gf.load_model_set(), sys.argv[2]); \
+print(\"check_install: geofusion.core from %s, method %s\" % (gf.__file__, e.method))" \
+      "$prefix" "$share/config/scene_estimator.yaml"
   for f in geofusion.launch fetch.launch visual_odometry.launch detection_viewer.launch; do
     roslaunch --files geofusion "$f" > /dev/null
   done
