@@ -300,13 +300,8 @@ void printTimes(const Options& o, const SoakRecord& record) {
 
 int main(int argc, char** argv) {
   Options o;
-  try {
-    parse(argc, argv, &o);
-  } catch (const std::exception& e) {
-    std::cerr << "soak_benchmark: " << e.what() << "\n";
-    usage();
+  if (!geofusion::readCommandLine("soak_benchmark", usage, [&] { parse(argc, argv, &o); }))
     return 2;
-  }
   GeoFusionConfig config;
   if (!o.config.apply("soak_benchmark", &config)) return 2;
   std::ofstream csv(o.out);

@@ -171,18 +171,23 @@ py::dict consistency(const ModelSet& models, const std::string& class_name,
                   py::arg("missing") = r.missing);
 }
 
+// The visual odometry; the camera matrix given once (constructor) or with each frame.
 class PyVisualOdometry {
  public:
-  explicit PyVisualOdometry(const GeoFusionConfig& config) : vo_(config.visual_odometry) {}
+  PyVisualOdometry(const GeoFusionConfig& config, const py::object& K)
+      : vo_(config.visual_odometry), K_(K) {}
 
-  py::dict track(const py::array& grey, const py::array& depth, const py::handle& K, double stamp) {
+  py::dict track(const py::array& grey, const py::array& depth, const py::object& K, double stamp) {
     const GreyInput g = greyInput(grey, "grey");
     const DepthInput d = depthInput(depth, "depth");
     if (g.view.width != d.view.width || g.view.height != d.view.height)
       throw py::value_error("track: grey and depth differ in size (" + shape(grey) + " and " +
                             shape(depth) + "): the depth must be registered to the grey image");
+    const py::object& camera = K.is_none() ? K_ : K;
+    if (camera.is_none())
+      throw py::value_error("track: no camera matrix: give K here or to VisualOdometry(K=...)");
     const VoFrameResult r =
-        vo_.track(g.view, d.view, intrinsics(K, d.view.width, d.view.height), stamp);
+        vo_.track(g.view, d.view, intrinsics(camera, d.view.width, d.view.height), stamp);
     return py::dict(py::arg("state") = toString(r.state), py::arg("pose_valid") = r.pose_valid,
                     py::arg("T_odom_cam") = matrix(r.T_odom_cam.matrix()),
                     py::arg("covariance") = matrix(r.covariance),
@@ -200,6 +205,7 @@ class PyVisualOdometry {
 
  private:
   VisualOdometry vo_;
+  py::object K_;
 };
 
 // The configuration as Python sees it: an opaque object made by load_config.
@@ -269,12 +275,13 @@ void bindModule(py::module_& m) {
   py::class_<PyVisualOdometry>(m, "VisualOdometry",
                                "ORB RGB-D visual odometry "
                                "(docs/visual_odometry.md)")
-      .def(py::init([](const py::object& config) {
-             return std::make_unique<PyVisualOdometry>(loadConfig(config));
+      .def(py::init([](const py::object& K, const py::object& config) {
+             return std::make_unique<PyVisualOdometry>(loadConfig(config), K);
            }),
-           py::arg("config") = py::none())
-      .def("track", &PyVisualOdometry::track, py::arg("grey"), py::arg("depth"), py::arg("K"),
-           py::arg("stamp") = 0.0, "One frame: grey (uint8 H x W), registered depth (float32).")
+           py::arg("K") = py::none(), py::arg("config") = py::none())
+      .def("track", &PyVisualOdometry::track, py::arg("grey"), py::arg("depth"),
+           py::arg("K") = py::none(), py::arg("stamp") = 0.0,
+           "One frame: grey (uint8 H x W), registered depth (float32, metres).")
       .def("reset", &PyVisualOdometry::reset, py::arg("T_odom_cam") = py::none())
       .def_property_readonly("num_keyframes", &PyVisualOdometry::numKeyframes);
 }

@@ -6,6 +6,7 @@
 
 #include <cstdlib>
 #include <functional>
+#include <iostream>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -80,5 +81,19 @@ class CommandLine {
   std::map<std::string, std::function<void(const std::string&)>> takes_value_;
   std::map<std::string, std::function<void()>> switches_;
 };
+
+/// Runs a tool's option parsing (`parse`, which throws std::exception on a bad option): false,
+/// having printed "<tool>: <why>" and the usage, when the command line is wrong (exit code 2).
+template <typename Parse>
+bool readCommandLine(const char* tool, void (*usage)(), Parse&& parse) {
+  try {
+    parse();
+    return true;
+  } catch (const std::exception& e) {
+    std::cerr << tool << ": " << e.what() << "\n";
+    usage();
+    return false;
+  }
+}
 
 }  // namespace geofusion

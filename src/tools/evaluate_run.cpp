@@ -52,13 +52,8 @@ Options parse(int argc, char** argv) {
 int main(int argc, char** argv) {
   using namespace geofusion;
   Options opt;
-  try {
-    opt = parse(argc, argv);
-  } catch (const std::exception& e) {
-    std::cerr << "evaluate_run: " << e.what() << "\n";
-    usage();
+  if (!geofusion::readCommandLine("evaluate_run", usage, [&] { opt = parse(argc, argv); }))
     return 2;
-  }
   const std::string set = opt.model_set.empty() ? modelSetOf(opt.ground_truth) : opt.model_set;
   ModelSet models;
   if (!loadModelSetOption("evaluate_run", set, opt.models_dir, &models)) return 1;

@@ -99,13 +99,8 @@ std::vector<geofusion::RawDetection> malformed() {
 
 int main(int argc, char** argv) {
   Options opt;
-  try {
-    opt = parse(argc, argv);
-  } catch (const std::exception& e) {
-    std::cerr << "make_synthetic_bag: " << e.what() << "\n";
-    usage();
+  if (!geofusion::readCommandLine("make_synthetic_bag", usage, [&] { opt = parse(argc, argv); }))
     return 2;
-  }
   using namespace geofusion;
   const BoxScene scene = BoxScene::demoScene();
   const PinholeIntrinsics K;

@@ -548,13 +548,7 @@ void printWarnings(const Options& opt, const geofusion::GeoFusionConfig& config,
 int main(int argc, char** argv) {
   using namespace geofusion;
   Options opt;
-  try {
-    opt = parse(argc, argv);
-  } catch (const std::exception& e) {
-    std::cerr << "run_offline: " << e.what() << "\n";
-    usage();
-    return 2;
-  }
+  if (!geofusion::readCommandLine("run_offline", usage, [&] { opt = parse(argc, argv); })) return 2;
   GeoFusionConfig config;
   if (!opt.config.apply("run_offline", &config)) return 2;
   if (opt.print_params) {

@@ -191,13 +191,8 @@ void printSummary(const Options& opt, const geofusion::GroundTruth& gt, const Vo
 int main(int argc, char** argv) {
   using namespace geofusion;
   Options opt;
-  try {
-    opt = parse(argc, argv);
-  } catch (const std::exception& e) {
-    std::cerr << "vo_benchmark: " << e.what() << "\n";
-    usage();
+  if (!geofusion::readCommandLine("vo_benchmark", usage, [&] { opt = parse(argc, argv); }))
     return 2;
-  }
   cv::setNumThreads(opt.threads);
   GroundTruth gt;
   std::string error;

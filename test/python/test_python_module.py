@@ -157,10 +157,10 @@ def textured_frame(seed=3):
 
 
 def test_visual_odometry_tracks_from_numpy():
-    vo = gf.VisualOdometry()
+    vo = gf.VisualOdometry(K_DEMO)
     grey, depth = textured_frame()
-    first = vo.track(grey, depth, K_DEMO, 0.0)
-    second = vo.track(grey, depth, K_DEMO, 0.033)
+    first = vo.track(grey, depth)
+    second = vo.track(grey, depth, stamp=0.033)
     assert first['pose_valid'] and second['pose_valid'], second['problem']
     assert second['state'] == 'tracking'
     assert np.abs(second['T_odom_cam'] - np.eye(4)).max() < 1e-3
@@ -169,6 +169,8 @@ def test_visual_odometry_tracks_from_numpy():
         vo.track(grey, depth[:100], K_DEMO)
     with pytest.raises(TypeError, match='uint8'):
         vo.track(grey.astype(np.float32), depth, K_DEMO)
+    with pytest.raises(ValueError, match='no camera matrix'):
+        gf.VisualOdometry().track(grey, depth)
 
 
 @pytest.fixture(scope='module')
