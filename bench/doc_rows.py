@@ -2,9 +2,11 @@
 """Rows of docs/BENCHMARK.md's per-suite tables from a suite's summary.json (bench_report.py's):
 
     doc_rows.py results/<suite>/summary.json
+    doc_rows.py --headline results/bench/summary.json results/bench_rgb/summary.json ...
 
 Prints the methods' table (the columns of docs/BENCHMARK.md "Latest figures"), GeoFusion's
-contacts per kind, the changed-scene line and the targets."""
+contacts per kind, the changed-scene line and the targets; with --headline, README's table (every
+method of every suite named)."""
 import json
 import sys
 
@@ -13,14 +15,41 @@ def f(v, fmt):
     return 'n/a' if v is None else fmt % v
 
 
+METHODS = ('FbF', 'FbF-R', 'B-SLAM', 'R-Front', 'GeoFusion')
+
+
+def headline(paths):
+    """README's benchmark table: one row a method and suite."""
+    print('| suite | method | mAP75 | mAP50:95 | P50 / R50 | per-keyframe ADD-S AUC '
+          '| final map true of true (false) | lost | camera ATE / odometry (mm) | p95 ms |')
+    print('|---|---|---:|---:|---|---:|---|---:|---|---:|')
+    for path in paths:
+        s = json.load(open(path))
+        suite = s.get('suite') or path.rstrip('/').split('/')[-2]
+        for name in METHODS:
+            m = s.get(name)
+            if not m:
+                continue
+            false = m['final_objects'] - m['final_matched']
+            print('| %s | %s | %s | %s | %s / %s | %s | %d of %d (%d) | %s | %s / %s | %s |' % (
+                suite, name, f(m['map75'], '%.1f'), f(m['map50_95'], '%.1f'),
+                f(m['precision50'], '%.3f'), f(m['recall50'], '%.3f'), f(m['adds_auc'], '%.1f'),
+                m['final_matched'], m['final_true_objects'], false,
+                f(m['lifecycle_lost'], '%d'), f(m['ate_mm'], '%.1f'),
+                f(m['odometry_ate_mm'], '%.1f'), f(m['ms_per_keyframe_p95'], '%.1f')))
+
+
 def main():
+    if sys.argv[1] == '--headline':
+        headline(sys.argv[2:])
+        return
     s = json.load(open(sys.argv[1]))
     print('| method | mAP50 | mAP75 | mAP50:95 | mAP50:95 mask boxes | P50 / R50 | per-keyframe ADD-S AUC '
           '| ADD-S < 1 cm | final map objects / true / of | lost / flip-flops | phantoms + swaps kept '
           '| ATE / odometry (mm) | support contact F1 (pair+type / pair) | penetration mean (mm) '
           '| p95 ms | RTF |')
     print('|---|---:|---:|---:|---:|---|---:|---:|---|---|---|---|---|---:|---:|---:|')
-    for name in ('FbF', 'FbF-R', 'B-SLAM', 'R-Front', 'GeoFusion'):
+    for name in METHODS:
         m = s.get(name)
         if not m:
             continue

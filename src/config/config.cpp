@@ -203,6 +203,9 @@ class Table {
             [f](GeoFusionConfig& c) { return &f(c)->render_mesh_triangles; });
     real("consistency.render_mesh_max_error_m", 0, 0.05, "... unless the surface moves more, m",
          [f](GeoFusionConfig& c) { return &f(c)->render_mesh_max_error_m; });
+    integer("consistency.threads", 1, 16,
+            "threads that score and refine a keyframe's detections (each its own renderer)",
+            [f](GeoFusionConfig& c) { return &f(c)->threads; });
   }
   void refinement() {
     auto f = [](GeoFusionConfig& c) { return &c.estimator.refinement; };

@@ -1,5 +1,7 @@
 #include "geofusion/estimation/scene_estimator.h"
 
+#include "geofusion/estimation/refinement_pool.h"
+
 #include "geofusion/common/enum_names.h"
 #include "geofusion/common/statistics.h"
 #include "geofusion/model/collision.h"
@@ -102,6 +104,13 @@ SceneEstimator::SceneEstimator(const ModelSet& models, const EstimatorConfig& co
   scorer_ = std::make_unique<ConsistencyScorer>(std::move(renderer), config.consistency);
   refiner_ = std::make_unique<DepthRefiner>(scorer_.get(), refinementOf(config, stages_));
   collider_ = std::make_unique<HullCollider>();
+  if (config.consistency.threads > 1 &&
+      (stages_.geometric_consistency || stages_.depth_refinement)) {
+    std::vector<std::shared_ptr<const ObjectModel>> all;
+    for (const auto& [name, model] : models_) all.push_back(model);
+    pool_ = std::make_unique<RefinementPool>(config.consistency.threads - 1, config.consistency,
+                                             refinementOf(config, stages_), all);
+  }
 }
 
 SceneEstimator::~SceneEstimator() = default;
@@ -119,6 +128,7 @@ void SceneEstimator::setConfig(const EstimatorConfig& config) {
   config_.method = method;
   scorer_->setConfig(config.consistency);
   refiner_->setConfig(refinementOf(config_, stages_));
+  if (pool_) pool_->setConfig(config.consistency, refinementOf(config_, stages_));
   monitor_.setConfig(config.monitor);
 }
 
@@ -383,15 +393,30 @@ SceneEstimator::ScoredDetections SceneEstimator::scoreDetections(const Keyframe&
       continue;
     }
     out.models[k] = it->second;
-    if (render) out.refinement[k] = refiner_->refine(it->second, d.T_cam_obj, kf.depth, kf.K);
+    out.usable.push_back(static_cast<int>(k));
+  }
+  // Each usable detection refined and scored against the depth (in the pool's threads too).
+  if (render) {
+    std::vector<RefinementJob> jobs;
+    for (int k : out.usable) jobs.push_back({out.models[k], kf.detections[k].T_cam_obj});
+    std::vector<DepthRefinement> refined;
+    if (pool_) {
+      refined = pool_->refine(jobs, kf.depth, kf.K, refiner_.get());
+    } else {
+      for (const RefinementJob& job : jobs)
+        refined.push_back(refiner_->refine(job.model, job.T_cam_obj, kf.depth, kf.K));
+    }
+    for (std::size_t i = 0; i < jobs.size(); ++i)
+      out.refinement[static_cast<std::size_t>(out.usable[i])] = refined[i];
+  }
+  for (int k : out.usable) {
     if (!stages_.geometric_consistency) {
-      out.score[k] = d.score;
+      out.score[k] = kf.detections[k].score;
     } else if (kf.depth.data) {
       out.score[k] = out.refinement[k].after.score;
     } else {
       out.score[k] = config_.consistency.undetermined_score;
     }
-    out.usable.push_back(static_cast<int>(k));
   }
   return out;
 }

@@ -183,6 +183,33 @@ TEST(SceneEstimator, GeoFusionFindsTheObjectsAndDropsFalsePositives) {
   std::printf("worst keyframe %.1f ms\n", worst);
 }
 
+// consistency.threads: the detections refined and scored by three threads give the map and the
+// per-detection reports of one thread, bit for bit.
+TEST(SceneEstimator, ScoringInSeveralThreadsGivesTheResultsOfOne) {
+  std::vector<KeyframeResult> one, three;
+  run(Method::kGeoFusion, &one);
+  run(Method::kGeoFusion, &three, [](EstimatorConfig* c) { c->consistency.threads = 3; });
+  ASSERT_EQ(one.size(), three.size());
+  std::size_t detections = 0;
+  for (std::size_t t = 0; t < one.size(); ++t) {
+    ASSERT_EQ(one[t].detections.size(), three[t].detections.size());
+    for (std::size_t k = 0; k < one[t].detections.size(); ++k) {
+      const DetectionReport &a = one[t].detections[k], &b = three[t].detections[k];
+      EXPECT_EQ(a.consistency, b.consistency);
+      EXPECT_EQ(a.refinement, b.refinement);
+      EXPECT_TRUE(a.T_cam_out.matrix() == b.T_cam_out.matrix());
+      EXPECT_EQ(a.decision, b.decision);
+      ++detections;
+    }
+    ASSERT_EQ(one[t].objects.size(), three[t].objects.size());
+    for (std::size_t j = 0; j < one[t].objects.size(); ++j) {
+      EXPECT_EQ(one[t].objects[j].id, three[t].objects[j].id);
+      EXPECT_TRUE(one[t].objects[j].T_map_obj.matrix() == three[t].objects[j].T_map_obj.matrix());
+    }
+  }
+  EXPECT_GT(detections, 100u);
+}
+
 TEST(SceneEstimator, GeoFusionIsMoreAccurateThanFrameByFrame) {
   const Sequence& s = demoSequence();
   // FbF: every keyframe's true-class detections against the truth.

@@ -30,6 +30,7 @@ namespace geofusion {
 
 class OffscreenRenderer;
 class ConsistencyScorer;
+class RefinementPool;
 class HullCollider;
 
 /// FbF: each keyframe's detections as they are. FbF-R: the same, depth-refined (what refinement
@@ -275,6 +276,7 @@ class SceneEstimator {
   std::map<std::string, std::shared_ptr<const ObjectModel>> models_;
   std::unique_ptr<ConsistencyScorer> scorer_;
   std::unique_ptr<DepthRefiner> refiner_;
+  std::unique_ptr<RefinementPool> pool_;  ///< consistency.threads > 1: the other scorers
   DetectionMonitor monitor_;
   std::unique_ptr<HullCollider> collider_;
   std::vector<Track> tracks_;

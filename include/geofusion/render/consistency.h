@@ -46,6 +46,10 @@ struct ConsistencyConfig {
   /// triangles, unless that would move the surface by more than render_mesh_max_error_m.
   int render_mesh_triangles = 1500;
   double render_mesh_max_error_m = 0.001;
+  /// The estimator scores and refines a keyframe's detections in this many threads (its own and
+  /// threads - 1 workers, each with its own OSMesa renderer); 1: all in the estimator's thread.
+  /// The results do not depend on it.
+  int threads = 1;
 };
 
 struct ConsistencyResult {
