@@ -104,12 +104,12 @@ SceneEstimator::SceneEstimator(const ModelSet& models, const EstimatorConfig& co
   scorer_ = std::make_unique<ConsistencyScorer>(std::move(renderer), config.consistency);
   refiner_ = std::make_unique<DepthRefiner>(scorer_.get(), refinementOf(config, stages_));
   collider_ = std::make_unique<HullCollider>();
-  if (config.consistency.threads > 1 &&
-      (stages_.geometric_consistency || stages_.depth_refinement)) {
+  if (stages_.geometric_consistency || stages_.depth_refinement) {
     std::vector<std::shared_ptr<const ObjectModel>> all;
     for (const auto& [name, model] : models_) all.push_back(model);
-    pool_ = std::make_unique<RefinementPool>(config.consistency.threads - 1, config.consistency,
-                                             refinementOf(config, stages_), all);
+    pool_ =
+        std::make_unique<RefinementPool>(std::max(0, config.consistency.threads - 1),
+                                         config.consistency, refinementOf(config, stages_), all);
   }
 }
 
@@ -399,13 +399,8 @@ SceneEstimator::ScoredDetections SceneEstimator::scoreDetections(const Keyframe&
   if (render) {
     std::vector<RefinementJob> jobs;
     for (int k : out.usable) jobs.push_back({out.models[k], kf.detections[k].T_cam_obj});
-    std::vector<DepthRefinement> refined;
-    if (pool_) {
-      refined = pool_->refine(jobs, kf.depth, kf.K, refiner_.get());
-    } else {
-      for (const RefinementJob& job : jobs)
-        refined.push_back(refiner_->refine(job.model, job.T_cam_obj, kf.depth, kf.K));
-    }
+    const std::vector<DepthRefinement> refined =
+        pool_->refine(jobs, kf.depth, kf.K, refiner_.get());  // 1 thread: all in this one
     for (std::size_t i = 0; i < jobs.size(); ++i)
       out.refinement[static_cast<std::size_t>(out.usable[i])] = refined[i];
   }

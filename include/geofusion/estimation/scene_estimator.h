@@ -276,7 +276,7 @@ class SceneEstimator {
   std::map<std::string, std::shared_ptr<const ObjectModel>> models_;
   std::unique_ptr<ConsistencyScorer> scorer_;
   std::unique_ptr<DepthRefiner> refiner_;
-  std::unique_ptr<RefinementPool> pool_;  ///< consistency.threads > 1: the other scorers
+  std::unique_ptr<RefinementPool> pool_;  ///< scoring methods: consistency.threads - 1 workers
   DetectionMonitor monitor_;
   std::unique_ptr<HullCollider> collider_;
   std::vector<Track> tracks_;
