@@ -53,6 +53,8 @@ bool parse(int argc, char** argv, Options* o) {
       o->consistency.inlier.centre = std::atof(argv[++i]);
     } else if (a == "--outlier-centre" && i + 1 < argc) {
       o->consistency.outlier.centre = std::atof(argv[++i]);
+    } else if (a == "--threads" && i + 1 < argc) {
+      o->consistency.threads = std::atoi(argv[++i]);
     } else if (a == "--eps-fp" && i + 1 < argc) {
       o->association.eps_fp = std::atof(argv[++i]);
     } else if (a == "--eps-new" && i + 1 < argc) {
@@ -71,7 +73,8 @@ bool parse(int argc, char** argv, Options* o) {
       std::fprintf(stderr,
                    "usage: %s [--models DIR] [--objects N] [--keyframes N] [--seed S] "
                    "[--detector PRESET] [--method NAME] [--eps-res M] [--eps-out M] "
-                   "[--inlier-centre X] [--outlier-centre X] [--eps-fp X] [--eps-new X]\n",
+                   "[--inlier-centre X] [--outlier-centre X] [--eps-fp X] [--eps-new X] "
+                   "[--threads N]\n",
                    argv[0]);
       return false;
     }

@@ -15,6 +15,7 @@ const char* toString(FrameDrop reason) {
     case FrameDrop::kNoOdometry: return "no camera pose";
     case FrameDrop::kOdometryGap: return "odometry gap";
     case FrameDrop::kBadDepth: return "unusable depth";
+    case FrameDrop::kBadCameraInfo: return "unusable camera_info";
     case FrameDrop::kQueueOverflow: return "queue overflow";
     case FrameDrop::kCount: break;
   }

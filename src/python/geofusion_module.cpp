@@ -272,6 +272,11 @@ void bindModule(py::module_& m) {
         py::arg("depth"), py::arg("K"), py::arg("config") = py::none(),
         "The geometric consistency f_gc of a model at a pose against a depth image.");
 
+  m.def("rectify", &rectifyImage, py::arg("image"), py::arg("K"), py::arg("D"),
+        "A raw image of a camera with lens distortion D (camera_info's plumb_bob or "
+        "rational_polynomial coefficients) made pinhole with the same K: depth (float32 H x W, "
+        "nearest pixel), grey (uint8 H x W) or colour (uint8 H x W x 3), both bilinear.");
+
   py::class_<PyVisualOdometry>(m, "VisualOdometry",
                                "ORB RGB-D visual odometry "
                                "(docs/visual_odometry.md)")

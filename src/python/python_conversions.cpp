@@ -1,5 +1,6 @@
 #include "python_conversions.h"
 
+#include "geofusion/common/lens.h"
 #include "geofusion/common/pose_validation.h"
 #include "geofusion/estimation/contacts.h"
 #include "geofusion/estimation/depth_refinement.h"
@@ -8,6 +9,7 @@
 
 #include <Eigen/SVD>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -116,6 +118,46 @@ GreyInput greyInput(const py::array& array, const char* what) {
                           static_cast<int>(array.shape(1)), static_cast<int>(array.shape(0)),
                           static_cast<int>(in.keep.strides(0))};
   return in;
+}
+
+// A raw image made pinhole with the same K (common/lens.h): depth float32 H x W from the nearest
+// pixel, grey uint8 H x W and colour uint8 H x W x 3 bilinear. A new array, the caller's as it was.
+py::array rectifyImage(const py::array& image, const py::handle& K, const py::handle& D) {
+  const py::array_t<double> d = doubles(D, "D");
+  if (d.ndim() != 1)
+    throw py::value_error(
+        "D: expected 5 (plumb_bob) or 8 (rational_polynomial) coefficients, got " + shape(d));
+  const LensDistortion lens{std::vector<double>(d.data(), d.data() + d.shape(0))};
+  if (!lens.problem().empty()) throw py::value_error("D: " + lens.problem());
+  const bool depth = image.ndim() == 2 && hasDtype<float>(image);
+  const bool grey = image.ndim() == 2 && hasDtype<std::uint8_t>(image);
+  const bool colour = image.ndim() == 3 && image.shape(2) == 3 && hasDtype<std::uint8_t>(image);
+  if (!depth && !grey && !colour)
+    throw py::value_error(
+        "image: expected float32 H x W depth, uint8 H x W grey or uint8 H x W x 3 colour, got " +
+        shape(image));
+  const PinholeIntrinsics intr =
+      intrinsics(K, static_cast<int>(image.shape(1)), static_cast<int>(image.shape(0)));
+  static LensWarp warp;  // its maps kept for the next image of the same camera (under the GIL)
+  std::vector<py::ssize_t> dims(image.shape(), image.shape() + image.ndim());
+  if (depth) {
+    const auto in = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(image);
+    std::vector<float> v(in.data(), in.data() + in.size());
+    warp.rectifyDepth(intr, lens, &v);
+    py::array_t<float> out(dims);
+    std::copy(v.begin(), v.end(), out.mutable_data());
+    return std::move(out);
+  }
+  const auto in =
+      py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>::ensure(image);
+  std::vector<std::uint8_t> v(in.data(), in.data() + in.size());
+  if (grey)
+    warp.rectifyGrey(intr, lens, &v);
+  else
+    warp.rectifyRgb(intr, lens, &v);
+  py::array_t<std::uint8_t> out(dims);
+  std::copy(v.begin(), v.end(), out.mutable_data());
+  return std::move(out);
 }
 
 PinholeIntrinsics intrinsics(const py::handle& K, int width, int height) {

@@ -43,6 +43,11 @@ GreyInput greyInput(const py::array& array, const char* what);
 /// "(480, 640) float32"
 std::string shape(const py::array& array);
 
+/// A raw image of a camera with lens distortion D made pinhole with the same K (common/lens.h):
+/// depth float32 H x W from the nearest pixel, grey uint8 H x W and colour uint8 H x W x 3
+/// bilinear. A new array; the caller's stays as it was.
+py::array rectifyImage(const py::array& image, const py::handle& K, const py::handle& D);
+
 /// Intrinsics of a 3 x 3 camera matrix for an image of width x height.
 PinholeIntrinsics intrinsics(const py::handle& K, int width, int height);
 

@@ -1,6 +1,7 @@
 #include "geofusion/ros/conversions.h"
 
 #include <cv_bridge/cv_bridge.h>
+#include <sensor_msgs/distortion_models.h>
 #include <sensor_msgs/image_encodings.h>
 
 #include <cmath>
@@ -146,6 +147,74 @@ PinholeIntrinsics intrinsicsFromCameraInfo(const sensor_msgs::CameraInfo& info) 
   K.cx = info.K[2];
   K.cy = info.K[5];
   return K;
+}
+
+bool lensFromCameraInfo(const sensor_msgs::CameraInfo& info, LensDistortion* lens,
+                        std::string* error) {
+  LensDistortion l{std::vector<double>(info.D.begin(), info.D.end())};
+  if (!l.any()) {
+    *lens = LensDistortion{};
+    return true;
+  }
+  const std::string& model = info.distortion_model;
+  const std::size_t expected = model == sensor_msgs::distortion_models::PLUMB_BOB             ? 5
+                               : model == sensor_msgs::distortion_models::RATIONAL_POLYNOMIAL ? 8
+                                                                                              : 0;
+  if (expected == 0) {
+    *error = "camera_info distortion model '" + model +
+             "' is not supported (plumb_bob or rational_polynomial; or rectified images with D "
+             "all zero)";
+    return false;
+  }
+  if (l.D.size() != expected) {
+    *error = "camera_info distortion model " + model + " with " + std::to_string(l.D.size()) +
+             " coefficients (it takes " + std::to_string(expected) + ")";
+    return false;
+  }
+  if (const std::string problem = l.problem(); !problem.empty()) {
+    *error = "camera_info: " + problem;
+    return false;
+  }
+  *lens = std::move(l);
+  return true;
+}
+
+bool CameraRectifier::update(const sensor_msgs::CameraInfo& info, std::string* error) {
+  const PinholeIntrinsics K = intrinsicsFromCameraInfo(info);
+  if (!K.valid() || !std::isfinite(K.fx) || !std::isfinite(K.fy) || !std::isfinite(K.cx) ||
+      !std::isfinite(K.cy)) {
+    *error = "camera_info K is not a camera (size " + std::to_string(info.width) + "x" +
+             std::to_string(info.height) + ", fx " + std::to_string(info.K[0]) + ", fy " +
+             std::to_string(info.K[4]) + ")";
+    return false;
+  }
+  LensDistortion lens;
+  if (!lensFromCameraInfo(info, &lens, error)) return false;
+  K_ = K;
+  lens_ = std::move(lens);
+  return true;
+}
+
+bool odometryImages(const sensor_msgs::Image& rgb, const sensor_msgs::Image& depth,
+                    const sensor_msgs::CameraInfo& info, CameraRectifier* camera,
+                    std::vector<std::uint8_t>* gray, std::vector<float>* metres,
+                    std::string* error) {
+  if (!toGray(rgb, gray, error)) return false;
+  if (!depthToMetres(depth, metres)) {
+    const char* why = depthProblem(depth);
+    *error = why ? why : "depth not convertible";
+    return false;
+  }
+  if (rgb.width != depth.width || rgb.height != depth.height) {
+    *error = "RGB and depth sizes differ";
+    return false;
+  }
+  if (!camera->update(info, error)) return false;
+  if (!camera->rectifyGrey(gray) || !camera->rectifyDepth(metres)) {
+    *error = "the images are not the size camera_info says";
+    return false;
+  }
+  return true;
 }
 
 }  // namespace geofusion

@@ -110,12 +110,14 @@ EstimatorPipeline::Outcome EstimatorPipeline::process(const sensor_msgs::Image& 
                     ? FrameDrop::kOdometryGap
                     : FrameDrop::kNoOdometry);
   }
-  const PinholeIntrinsics K = intrinsicsFromCameraInfo(info);
-  if (!K.valid() || !depthToMetres(depth, &depth_) ||
+  if (!camera_.update(info, &last_camera_error_)) return drop(FrameDrop::kBadCameraInfo);
+  const PinholeIntrinsics& K = camera_.K();
+  if (!depthToMetres(depth, &depth_) ||
       depth_.size() != static_cast<std::size_t>(K.width) * K.height) {
     return drop(FrameDrop::kBadDepth);
   }
   if (!selector_.select(pose.T_odom_cam)) return Outcome::kNotKeyframe;
+  camera_.rectifyDepth(&depth_);  // a distorted camera's depth made pinhole (sizes checked above)
   Keyframe kf;
   kf.stamp_s = stamp_s;
   kf.K = K;

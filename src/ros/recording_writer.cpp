@@ -120,7 +120,7 @@ void RecordingWriter::writeOdometry(const ros::Time& stamp, const Eigen::Isometr
 
 void RecordingWriter::writeImages(const ros::Time& stamp, const PinholeIntrinsics& K,
                                   const std::vector<std::uint8_t>& rgb,
-                                  const std::vector<float>& depth) {
+                                  const std::vector<float>& depth, const LensDistortion& lens) {
   sensor_msgs::Image image;
   image.header.stamp = stamp;
   image.header.frame_id = layout_.optical_frame;
@@ -159,6 +159,7 @@ void RecordingWriter::writeImages(const ros::Time& stamp, const PinholeIntrinsic
   info.height = image.height;
   info.distortion_model = "plumb_bob";
   info.D.assign(5, 0.0);
+  if (lens.any()) info.D = lens.D;
   info.K = {K.fx, 0, K.cx, 0, K.fy, K.cy, 0, 0, 1};
   info.R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   info.P = {K.fx, 0, K.cx, 0, 0, K.fy, K.cy, 0, 0, 0, 1, 0};

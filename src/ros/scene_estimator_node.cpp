@@ -326,6 +326,11 @@ void SceneEstimatorNode::warnDropped(const sensor_msgs::Image& depth,
               << (depthProblem(depth) ? depthProblem(depth) : "camera_info or depth size mismatch")
               << " (" << so_far << " so far)");
       break;
+    case FrameDrop::kBadCameraInfo:
+      ROS_WARN_STREAM_THROTTLE(warn_period_s_,
+                               "geofusion: frame skipped: " << pipeline_->lastCameraError() << " ("
+                                                            << so_far << " so far)");
+      break;
     default:
       ROS_WARN_STREAM_THROTTLE(warn_period_s_,
                                "geofusion: frame at "

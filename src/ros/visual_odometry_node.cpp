@@ -76,16 +76,10 @@ void VisualOdometryNode::onFrame(const sensor_msgs::ImageConstPtr& rgb,
   std::vector<std::uint8_t> gray;
   std::vector<float> metres;
   std::string error;
-  if (!toGray(*rgb, &gray, &error) || !depthToMetres(*depth, &metres) ||
-      rgb->width != depth->width || rgb->height != depth->height) {
+  if (!odometryImages(*rgb, *depth, *info, &camera_, &gray, &metres, &error)) {
     ++skipped_;
-    const char* why = depthProblem(*depth);
-    ROS_WARN_STREAM_THROTTLE(warn_period_s_,
-                             "geofusion: visual odometry skipped a frame: "
-                                 << (!error.empty() ? error
-                                     : why          ? std::string(why)
-                                                    : std::string("RGB and depth sizes differ"))
-                                 << " (" << skipped_ << " so far)");
+    ROS_WARN_STREAM_THROTTLE(warn_period_s_, "geofusion: visual odometry skipped a frame: "
+                                                 << error << " (" << skipped_ << " so far)");
     return;
   }
   // The camera's place on the robot: base -> camera from TF (the head may move).
@@ -107,7 +101,7 @@ void VisualOdometryNode::onFrame(const sensor_msgs::ImageConstPtr& rgb,
     vo_->reset(T_base_cam);
     started_ = true;
   }
-  const PinholeIntrinsics K = intrinsicsFromCameraInfo(*info);
+  const PinholeIntrinsics& K = camera_.K();
   const VoFrameResult r = vo_->track(
       GrayImageView{gray.data(), static_cast<int>(rgb->width), static_cast<int>(rgb->height), 0},
       DepthImageView{metres.data(), static_cast<int>(depth->width),

@@ -52,6 +52,7 @@ bool suiteByName(const std::string& name, SuiteSpec* suite) {
     s.detector_name = rgb ? "rgb" : name == "bench" ? "densefusion_persistent" : "densefusion";
     DetectorModel::byName(s.detector_name, &s.detector);
     s.depth = DepthNoise::structuredLight();  // the Fetch head camera, calibrated (issue 31)
+    s.lens = LensDistortion::primesense();    // ... and its family's lens (issue 31)
   } else if (name == "vo" || name == "vo_fast") {
     // Visual odometry: every 30 Hz frame has images, table and floor are textured. "vo": the
     // table orbit of the other suites (15 s); "vo_fast": 10 s with a faster orbit and the head
@@ -113,6 +114,7 @@ std::string describeSuite(const SuiteSpec& s) {
     o << "; look " << t.look_amplitude_m << " " << t.look_rate;
   if (s.textured_background) o << "; textured background";
   if (s.colour.enabled) o << "; colour " << s.colour.describe();
+  if (s.lens.any()) o << "; lens " << s.lens.describe();
   const PersistentErrorModel& e = m.persistence;
   if (e.enabled() || e.score_correctness != PersistentErrorModel().score_correctness) {
     o << "; persistent " << e.bias_translation_m << " " << e.bias_rotation_rad << " "

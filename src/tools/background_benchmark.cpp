@@ -48,15 +48,14 @@ bool readFrames(const Options& o, const std::vector<KeyframeResult>& keyframes,
                 std::map<long long, Frame>* frames) {
   std::map<long long, bool> wanted;
   for (const KeyframeResult& k : keyframes) wanted[std::llround(k.stamp_s * 1e9)] = true;
-  std::map<long long, PinholeIntrinsics> infos;
+  std::map<long long, sensor_msgs::CameraInfo> infos;
   rosbag::Bag bag;
   try {
     bag.open(o.bag, rosbag::bagmode::Read);
     for (const rosbag::MessageInstance& m :
          rosbag::View(bag, rosbag::TopicQuery({o.depth_topic, o.info_topic}))) {
       if (const auto info = m.instantiate<sensor_msgs::CameraInfo>()) {
-        infos[static_cast<long long>(info->header.stamp.toNSec())] =
-            intrinsicsFromCameraInfo(*info);
+        infos[static_cast<long long>(info->header.stamp.toNSec())] = *info;
       } else if (const auto image = m.instantiate<sensor_msgs::Image>()) {
         const long long stamp = static_cast<long long>(image->header.stamp.toNSec());
         if (!wanted.count(stamp)) continue;
@@ -68,13 +67,22 @@ bool readFrames(const Options& o, const std::vector<KeyframeResult>& keyframes,
     std::cerr << "background_benchmark: cannot read " << o.bag << ": " << e.what() << "\n";
     return false;
   }
+  CameraRectifier camera;
   for (auto it = frames->begin(); it != frames->end();) {
     const auto info = infos.find(it->first);
     if (info == infos.end()) {
       it = frames->erase(it);
       continue;
     }
-    it->second.K = info->second;
+    // The estimator's depth: made pinhole for a camera with a lens distortion.
+    std::string error;
+    if (!camera.update(info->second, &error) || !camera.rectifyDepth(&it->second.depth)) {
+      std::cerr << "background_benchmark: frame skipped: "
+                << (error.empty() ? "depth not the size camera_info says" : error) << "\n";
+      it = frames->erase(it);
+      continue;
+    }
+    it->second.K = camera.K();
     ++it;
   }
   return true;

@@ -7,7 +7,8 @@
 //   DIR]
 //       [--model-set YAML] [--scenes bench_01,...] [--keyframes N] [--image-every N]
 //       [--detector densefusion|posecnn|densefusion_persistent|rgb]
-//       [--sensor nguyen2012|structured_light|active_stereo|time_of_flight]
+//       [--sensor nguyen2012|structured_light|active_stereo|time_of_flight] [--lens
+//       primesense|none]
 //       [--depth-encoding 16UC1|32FC1] [--no-compression] [--previews N] [--force]
 #include "command_line.h"
 #include "geofusion/evaluation/sequence_calibration.h"
@@ -39,6 +40,7 @@ struct Options {
   int image_every = -1;
   std::string detector;  ///< "": the suite's own preset
   std::string sensor;    ///< "": the suite's own depth camera model
+  std::string lens;      ///< "": the suite's own lens (primesense or none)
   std::string depth_encoding = "16UC1";
   bool compress = true;
   int previews = 4;
@@ -52,7 +54,7 @@ void usage() {
          "         [--models DIR] [--model-set YAML] [--scenes NAME,NAME] [--keyframes N]\n"
          "         [--image-every N] [--detector densefusion|posecnn|densefusion_persistent|rgb]\n"
          "         [--sensor nguyen2012|structured_light|active_stereo|time_of_flight]\n"
-         "         [--depth-encoding 16UC1|32FC1]\n"
+         "         [--lens primesense|none] [--depth-encoding 16UC1|32FC1]\n"
          "         [--no-compression] [--previews N=4] [--force]\n"
          "  --out-dir      default $GEOFUSION_DATA/<suite>, else ~/.cache/geofusion/data/<suite>\n"
          "  --models       YCB-Video models folder (bench); default $GEOFUSION_YCB_DIR, else\n"
@@ -63,6 +65,8 @@ void usage() {
          "                 rgb for bench_rgb, densefusion for the others; docs/dataset.md)\n"
          "  --sensor       depth camera model (default the suite's: structured_light, the\n"
          "                 Fetch head camera, for the bench suites; nguyen2012 for the others)\n"
+         "  --lens         lens distortion of the images and camera_info (default the suite's:\n"
+         "                 primesense for the bench suites, none for the others)\n"
          "  --previews     keyframes per scene written as PNG into <out-dir>/previews\n"
          "  --force        regenerate scenes whose cached files match the request\n";
 }
@@ -96,6 +100,7 @@ Options parse(int argc, char** argv) {
   args.value("--image-every", &o.image_every);
   args.value("--detector", &o.detector);
   args.value("--sensor", &o.sensor);
+  args.value("--lens", &o.lens);
   args.value("--depth-encoding", &o.depth_encoding);
   args.toggle("--no-compression", &o.compress, false);
   args.value("--previews", &o.previews);
@@ -112,6 +117,8 @@ Options parse(int argc, char** argv) {
     throw std::runtime_error(
         "--sensor must be nguyen2012, structured_light, active_stereo or time_of_flight");
   }
+  if (!o.lens.empty() && o.lens != "primesense" && o.lens != "none")
+    throw std::runtime_error("--lens must be primesense or none");
   if (o.keyframes == 0 || o.keyframes < -1 || o.image_every == 0 || o.image_every < -1) {
     throw std::runtime_error("--keyframes and --image-every must be > 0");
   }
@@ -170,6 +177,8 @@ bool applyOptions(Options* opt, geofusion::SuiteSpec* suite) {
   opt->detector = suite->detector_name;  // what the recordings and the printout say
   if (!opt->sensor.empty()) DepthNoise::byName(opt->sensor, &suite->depth);
   opt->sensor = suite->depth.name;
+  if (opt->lens == "primesense") suite->lens = LensDistortion::primesense();
+  if (opt->lens == "none") suite->lens = LensDistortion{};
   if (!opt->scenes.empty()) {
     std::vector<SceneSpec> chosen;
     for (const std::string& name : opt->scenes) {
@@ -294,6 +303,7 @@ void writeFrames(const SuiteInputs& in, const geofusion::SceneSpec& spec,
   std::mt19937 rng(spec.seed + 2000);
   // The colour camera's own random numbers: depth and detections stay as they were.
   ColourCamera colour(suite.colour, spec.seed + 3000);
+  LensWarp lens_warp;
   const ros::Time t0(suite.stamp_origin_s);
   writer->writeStaticTransforms(t0, RobotGeometry::cameraLinkToOptical());
   const int preview_every =
@@ -320,7 +330,10 @@ void writeFrames(const SuiteInputs& in, const geofusion::SceneSpec& spec,
         colour.apply(K, before.T_map_optical, pose.T_map_optical, 1.0 / suite.camera_rate_hz,
                      medianDepth(f.images.depth), &f.images.rgb);
       }
-      writer->writeImages(stamp, K, f.images.rgb, f.images.depth);
+      // What the lens makes of the pinhole images (camera_info says so with its D).
+      lens_warp.distortRgb(K, suite.lens, &f.images.rgb);
+      lens_warp.distortDepth(K, suite.lens, &f.images.depth);
+      writer->writeImages(stamp, K, f.images.rgb, f.images.depth, suite.lens);
       // A detector answers after its processing time; the header keeps the image stamp.
       writer->writeDetections(stamp, stamp + ros::Duration(0.1), f.detections);
       calibration->add(scene, pose.T_map_optical, f);

@@ -316,7 +316,10 @@ void processFrame(const Options& opt, const sensor_msgs::Image& depth,
     if (reading->warned++ < 5)
       std::cerr << "run_offline: frame at " << dets.header.stamp
                 << " dropped: " << toString(pipeline->lastDrop())
-                << (pipeline->lastDrop() == FrameDrop::kNoOdometry ? ": " + pose.error : "")
+                << (pipeline->lastDrop() == FrameDrop::kNoOdometry ? ": " + pose.error
+                    : pipeline->lastDrop() == FrameDrop::kBadCameraInfo
+                        ? ": " + pipeline->lastCameraError()
+                        : "")
                 << "\n";
     return;
   }

@@ -77,6 +77,7 @@ struct VoRun {
   geofusion::VisualOdometry vo;
   std::vector<std::uint8_t> gray;  ///< the images converted, reused frame to frame
   std::vector<float> depth;
+  geofusion::CameraRectifier camera;  ///< K and lens of camera_info (distorted images made pinhole)
   std::vector<double> stamps, times, convert_times;
   std::vector<Eigen::Isometry3d> poses;
   int frames = 0, lost = 0, restarts = 0, keyframes = 0, unusable = 0;
@@ -89,14 +90,14 @@ void trackFrame(const Options& opt, const Pending& set, VoRun* run, std::string*
   // The node's own work before tracking: the grey and metric depth images.
   const auto c0 = std::chrono::steady_clock::now();
   const bool converted =
-      toGray(*set.rgb, &run->gray, error) && depthToMetres(*set.depth, &run->depth);
+      odometryImages(*set.rgb, *set.depth, *set.info, &run->camera, &run->gray, &run->depth, error);
   run->convert_times.push_back(
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - c0).count());
   if (!converted) {
     ++run->unusable;
     return;
   }
-  const PinholeIntrinsics K = intrinsicsFromCameraInfo(*set.info);
+  const PinholeIntrinsics& K = run->camera.K();
   GrayImageView g{run->gray.data(), static_cast<int>(set.rgb->width),
                   static_cast<int>(set.rgb->height), 0};
   DepthImageView d{run->depth.data(), static_cast<int>(set.depth->width),

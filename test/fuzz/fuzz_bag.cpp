@@ -50,7 +50,19 @@ int fuzzBag(const std::uint8_t* data, std::size_t size) {
         else
           FUZZ_CHECK(depthProblem(*image) != nullptr);
       } else if (const auto info = m.instantiate<sensor_msgs::CameraInfo>()) {
-        (void)intrinsicsFromCameraInfo(*info).valid();
+        // As the estimator and the odometry: K and the lens, a rectifier made from them (its
+        // maps built only for a small, valid camera: a fuzzed 60000 x 60000 would be 29 GB).
+        CameraRectifier camera;
+        std::string error;
+        if (camera.update(*info, &error)) {
+          FUZZ_CHECK(camera.K().valid() && camera.lens().problem().empty());
+          if (info->width <= 64 && info->height <= 64) {
+            std::vector<float> depth(static_cast<std::size_t>(info->width) * info->height, 1.f);
+            FUZZ_CHECK(camera.rectifyDepth(&depth));
+          }
+        } else {
+          FUZZ_CHECK(!error.empty());
+        }
       } else if (const auto detections = m.instantiate<geofusion::DetectionArray>()) {
         DetectionTally tally;
         checker.process(fromMsg(*detections), Eigen::Isometry3d::Identity(), &tally);

@@ -173,6 +173,46 @@ def test_visual_odometry_tracks_from_numpy():
         gf.VisualOdometry().track(grey, depth)
 
 
+PRIMESENSE_D = [0.2312, -0.7849, -0.0033, -0.0001, 0.9172]  # docs/dataset.md, "lens"
+
+
+def plumb_bob(K, D, u, v):
+    """Where the lens puts the pinhole pixel (u, v) (the model written out, not OpenCV)."""
+    k1, k2, p1, p2, k3 = D
+    x, y = (u - K[0][2]) / K[0][0], (v - K[1][2]) / K[1][1]
+    r2 = x * x + y * y
+    radial = 1 + k1 * r2 + k2 * r2 ** 2 + k3 * r2 ** 3
+    xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
+    yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
+    return K[0][0] * xd + K[0][2], K[1][1] * yd + K[1][2]
+
+
+def test_rectify_makes_a_distorted_image_pinhole():
+    K = np.array(K_DEMO, float)
+    # A raw grey image with a bright 3 x 3 dot where the lens shows pinhole pixel (60, 50).
+    du, dv = plumb_bob(K, PRIMESENSE_D, 60, 50)
+    raw = np.zeros((480, 640), np.uint8)
+    raw[int(round(dv)) - 1:int(round(dv)) + 2, int(round(du)) - 1:int(round(du)) + 2] = 255
+    assert abs(du - 60) + abs(dv - 50) > 8  # the lens moves it by many pixels
+    before = raw.copy()
+    rect = gf.rectify(raw, K, PRIMESENSE_D)
+    assert np.array_equal(raw, before)  # the caller's image as it was
+    vs, us = np.nonzero(rect > 64)
+    w = rect[vs, us].astype(float)
+    # Its centre lands within a pixel of (60, 50) (the dot was placed to the nearest raw pixel).
+    assert abs((us * w).sum() / w.sum() - 60) < 1.0 and abs((vs * w).sum() / w.sum() - 50) < 1.0
+    # Depth takes the nearest pixel (no mixed depths); colour keeps its three channels.
+    depth = np.where(np.arange(640)[None, :] < 100, 0.5, 1.2).astype(np.float32).repeat(480, 0)
+    assert np.isin(gf.rectify(depth, K, PRIMESENSE_D), np.float32([0.0, 0.5, 1.2])).all()
+    assert gf.rectify(np.zeros((480, 640, 3), np.uint8), K, PRIMESENSE_D).shape == (480, 640, 3)
+    # No distortion: the same image.
+    assert np.array_equal(gf.rectify(depth, K, [0, 0, 0, 0, 0]), depth)
+    with pytest.raises(ValueError, match='coefficients'):
+        gf.rectify(depth, K, [0.1, 0.2, 0.3])
+    with pytest.raises(ValueError, match='expected float32 H x W depth'):
+        gf.rectify(depth.astype(np.float64), K, PRIMESENSE_D)
+
+
 @pytest.fixture(scope='module')
 def estimator():
     return gf.SceneEstimator(gf.load_model_set())

@@ -28,10 +28,11 @@ def make_bag(name, *args):
     return bag, gt
 
 
-def generate_demo(out_dir, keyframes):
-    """Generates the demo suite's recording into out_dir; returns the path of demo_01.bag."""
+def generate_demo(out_dir, keyframes, extra=()):
+    """Generates the demo suite's recording into out_dir (`extra`: more generate_dataset
+    arguments); returns the path of demo_01.bag."""
     subprocess.check_call([find_tool('generate_dataset'), '--suite', 'demo', '--out-dir', out_dir,
-                           '--keyframes', str(keyframes), '--previews', '0'],
+                           '--keyframes', str(keyframes), '--previews', '0'] + list(extra),
                           stdout=subprocess.DEVNULL)
     return os.path.join(out_dir, 'demo_01.bag')
 

@@ -23,6 +23,7 @@ enum class FrameDrop {
   kNoOdometry,      ///< no camera pose for its stamp (no TF, no odometry message)
   kOdometryGap,     ///< odometry samples around its stamp further apart than max_odometry_gap_s
   kBadDepth,        ///< empty, wrong encoding, or not the size camera_info says
+  kBadCameraInfo,   ///< camera_info's K not a camera, or a lens distortion it cannot rectify
   kQueueOverflow,   ///< pushed out of the node's frame queue by newer frames
                     ///< (input.frame_queue_size)
   kCount

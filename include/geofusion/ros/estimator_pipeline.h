@@ -11,6 +11,7 @@
 #include "geofusion/estimation/keyframe_selector.h"
 #include "geofusion/estimation/map_store.h"
 #include "geofusion/estimation/scene_estimator.h"
+#include "geofusion/ros/conversions.h"
 
 #include <geofusion/DetectionArray.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -68,6 +69,8 @@ class EstimatorPipeline {
   FrameDrop lastDrop() const { return last_drop_; }
   /// Why the last frame had no camera pose (FrameDrop::kNoOdometry).
   const std::string& lastPoseError() const { return last_pose_error_; }
+  /// Why the last frame's camera_info was unusable (FrameDrop::kBadCameraInfo).
+  const std::string& lastCameraError() const { return last_camera_error_; }
   /// Frames given to process(), and those dropped by reason.
   std::size_t framesSeen() const { return frames_seen_; }
   const FrameDropCounts& drops() const { return drops_; }
@@ -113,12 +116,13 @@ class EstimatorPipeline {
   DetectionTally tally_;
   FrameDropCounts drops_;
   FrameDrop last_drop_ = FrameDrop::kNone;
-  std::string last_pose_error_;
+  std::string last_pose_error_, last_camera_error_;
   std::size_t frames_seen_ = 0, budget_overruns_ = 0, last_capped_ = 0;
   bool last_overran_ = false;
   double last_keyframe_ms_ = 0.0;
   RunResults resumed_;  ///< the map loadMap() resumed, until the first keyframe after it
   std::vector<float> depth_;
+  CameraRectifier camera_;  ///< K and the lens of camera_info; raw depth made pinhole
 };
 
 }  // namespace geofusion

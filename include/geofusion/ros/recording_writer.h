@@ -5,6 +5,7 @@
 #pragma once
 
 #include "geofusion/common/camera.h"
+#include "geofusion/common/lens.h"
 #include "geofusion/common/measurement.h"
 #include "geofusion/common/robot_names.h"
 
@@ -64,8 +65,10 @@ class RecordingWriter {
   void writeOdometry(const ros::Time& stamp, const Eigen::Isometry3d& T_odom_base);
   /// RGB (rgb8, 3 bytes a pixel), registered depth in metres (0 = no reading) and both
   /// camera_infos, all stamped `stamp` in the optical frame.
+  /// `lens`: the distortion the images were taken with (camera_info's plumb_bob D; none: zeros).
   void writeImages(const ros::Time& stamp, const PinholeIntrinsics& K,
-                   const std::vector<std::uint8_t>& rgb, const std::vector<float>& depth);
+                   const std::vector<std::uint8_t>& rgb, const std::vector<float>& depth,
+                   const LensDistortion& lens = LensDistortion{});
   /// DetectionArray in the optical frame; header stamp `stamp`, written at `write_time`.
   void writeDetections(const ros::Time& stamp, const ros::Time& write_time,
                        const std::vector<RawDetection>& detections);

@@ -5,6 +5,7 @@
 #pragma once
 
 #include "geofusion/odometry/visual_odometry.h"
+#include "geofusion/ros/conversions.h"
 #include "geofusion/ros/rgbd_subscriber.h"
 
 #include <diagnostic_updater/diagnostic_updater.h>
@@ -39,6 +40,7 @@ class VisualOdometryNode {
   double tf_timeout_s_ = 0.1, warn_period_s_ = 5.0;
 
   std::mutex mutex_;
+  CameraRectifier camera_;  ///< K and the lens of camera_info; raw images made pinhole
   std::unique_ptr<VisualOdometry> vo_;
   bool started_ = false;
   ros::Time last_stamp_;

@@ -3,6 +3,7 @@
 // the generate_dataset tool writes the recordings (docs/dataset.md documents the file formats).
 #pragma once
 
+#include "geofusion/common/lens.h"
 #include "geofusion/common/robot_names.h"
 #include "geofusion/simulation/clutter_scene.h"
 #include "geofusion/simulation/colour_camera.h"
@@ -47,6 +48,8 @@ struct SuiteSpec {
   bool textured_background = false;
   ColourNoise
       colour;  ///< the colour camera's blur, rolling shutter, exposure and noise (vo suites)
+  /// The lens: the images are distorted by it and camera_info's D says so (bench suites).
+  LensDistortion lens;
 
   int cameraFrames() const { return (keyframes - 1) * image_every + 1; }
   bool isKeyframe(int frame) const { return image_every > 0 && frame % image_every == 0; }
