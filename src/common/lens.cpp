@@ -96,6 +96,7 @@ LensWarp::~LensWarp() = default;
 bool LensWarp::warp(const PinholeIntrinsics& K, const LensDistortion& D, bool rectify, int type,
                     bool nearest, void* data, std::size_t size) {
   if (!K.valid() || !D.problem().empty()) return false;
+  if (K.width >= kMaxWarpSide || K.height >= kMaxWarpSide) return !D.any();
   const cv::Mat probe(1, 1, type);
   if (size != static_cast<std::size_t>(K.width) * K.height * probe.elemSize()) return false;
   if (!D.any()) return true;
@@ -104,16 +105,26 @@ bool LensWarp::warp(const PinholeIntrinsics& K, const LensDistortion& D, bool re
     maps = std::make_unique<Maps>();
     maps->K = K;
     maps->D = D.D;
-    if (rectify)
-      rectifyMaps(K, D.D, &maps->map_x, &maps->map_y);
-    else
-      distortMaps(K, D.D, &maps->map_x, &maps->map_y);
+    try {
+      if (rectify)
+        rectifyMaps(K, D.D, &maps->map_x, &maps->map_y);
+      else
+        distortMaps(K, D.D, &maps->map_x, &maps->map_y);
+    } catch (const cv::Exception&) {
+      maps.reset();
+      return false;
+    }
   }
-  cv::Mat image(K.height, K.width, type, data);
-  cv::Mat out;
-  cv::remap(image, out, maps->map_x, maps->map_y, nearest ? cv::INTER_NEAREST : cv::INTER_LINEAR,
-            cv::BORDER_CONSTANT, cv::Scalar::all(0));
-  out.copyTo(image);
+  try {
+    cv::Mat image(K.height, K.width, type, data);
+    cv::Mat out;
+    cv::remap(image, out, maps->map_x, maps->map_y, nearest ? cv::INTER_NEAREST : cv::INTER_LINEAR,
+              cv::BORDER_CONSTANT, cv::Scalar::all(0));
+    out.copyTo(image);
+  } catch (const cv::Exception&) {  // a camera OpenCV cannot warp: refused, never a crash
+    maps.reset();
+    return false;
+  }
   return true;
 }
 

@@ -126,7 +126,7 @@ py::array rectifyImage(const py::array& image, const py::handle& K, const py::ha
   const py::array_t<double> d = doubles(D, "D");
   if (d.ndim() != 1)
     throw py::value_error(
-        "D: expected 5 (plumb_bob) or 8 (rational_polynomial) coefficients, got " + shape(d));
+        "D: expected 5 (plumb_bob), 8 (rational_polynomial) or 4 coefficients, got " + shape(d));
   const LensDistortion lens{std::vector<double>(d.data(), d.data() + d.shape(0))};
   if (!lens.problem().empty()) throw py::value_error("D: " + lens.problem());
   const bool depth = image.ndim() == 2 && hasDtype<float>(image);
@@ -138,12 +138,13 @@ py::array rectifyImage(const py::array& image, const py::handle& K, const py::ha
         shape(image));
   const PinholeIntrinsics intr =
       intrinsics(K, static_cast<int>(image.shape(1)), static_cast<int>(image.shape(0)));
+  const std::string cannot = "image: " + shape(image) + " too large to rectify";
   static LensWarp warp;  // its maps kept for the next image of the same camera (under the GIL)
   std::vector<py::ssize_t> dims(image.shape(), image.shape() + image.ndim());
   if (depth) {
     const auto in = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(image);
     std::vector<float> v(in.data(), in.data() + in.size());
-    warp.rectifyDepth(intr, lens, &v);
+    if (!warp.rectifyDepth(intr, lens, &v)) throw py::value_error(cannot);
     py::array_t<float> out(dims);
     std::copy(v.begin(), v.end(), out.mutable_data());
     return std::move(out);
@@ -151,10 +152,8 @@ py::array rectifyImage(const py::array& image, const py::handle& K, const py::ha
   const auto in =
       py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>::ensure(image);
   std::vector<std::uint8_t> v(in.data(), in.data() + in.size());
-  if (grey)
-    warp.rectifyGrey(intr, lens, &v);
-  else
-    warp.rectifyRgb(intr, lens, &v);
+  if (!(grey ? warp.rectifyGrey(intr, lens, &v) : warp.rectifyRgb(intr, lens, &v)))
+    throw py::value_error(cannot);
   py::array_t<std::uint8_t> out(dims);
   std::copy(v.begin(), v.end(), out.mutable_data());
   return std::move(out);

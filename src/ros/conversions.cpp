@@ -190,6 +190,11 @@ bool CameraRectifier::update(const sensor_msgs::CameraInfo& info, std::string* e
   }
   LensDistortion lens;
   if (!lensFromCameraInfo(info, &lens, error)) return false;
+  if (lens.any() && (K.width >= kMaxWarpSide || K.height >= kMaxWarpSide)) {
+    *error = "camera_info: a " + std::to_string(K.width) + "x" + std::to_string(K.height) +
+             " image with lens distortion is too large to rectify";
+    return false;
+  }
   K_ = K;
   lens_ = std::move(lens);
   return true;

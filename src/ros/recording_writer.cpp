@@ -159,7 +159,10 @@ void RecordingWriter::writeImages(const ros::Time& stamp, const PinholeIntrinsic
   info.height = image.height;
   info.distortion_model = "plumb_bob";
   info.D.assign(5, 0.0);
-  if (lens.any()) info.D = lens.D;
+  if (lens.any()) {
+    info.D = lens.D;
+    if (lens.D.size() == 8) info.distortion_model = "rational_polynomial";
+  }
   info.K = {K.fx, 0, K.cx, 0, K.fy, K.cy, 0, 0, 1};
   info.R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   info.P = {K.fx, 0, K.cx, 0, 0, K.fy, K.cy, 0, 0, 0, 1, 0};

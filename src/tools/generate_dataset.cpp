@@ -330,13 +330,14 @@ void writeFrames(const SuiteInputs& in, const geofusion::SceneSpec& spec,
         colour.apply(K, before.T_map_optical, pose.T_map_optical, 1.0 / suite.camera_rate_hz,
                      medianDepth(f.images.depth), &f.images.rgb);
       }
-      // What the lens makes of the pinhole images (camera_info says so with its D).
+      // The depth noise measured on the pinhole images (against the clean pinhole render) ...
+      calibration->add(scene, pose.T_map_optical, f);
+      // ... then what the lens makes of them (camera_info says so with its D).
       lens_warp.distortRgb(K, suite.lens, &f.images.rgb);
       lens_warp.distortDepth(K, suite.lens, &f.images.depth);
       writer->writeImages(stamp, K, f.images.rgb, f.images.depth, suite.lens);
       // A detector answers after its processing time; the header keeps the image stamp.
       writer->writeDetections(stamp, stamp + ros::Duration(0.1), f.detections);
-      calibration->add(scene, pose.T_map_optical, f);
       g.visible_fraction = f.visible_fraction;
       g.visible_pixels = f.visible_pixels;
       g.visible_boxes = f.visible_boxes;

@@ -31,6 +31,9 @@ struct LensDistortion {
   static LensDistortion primesense();
 };
 
+/// Images OpenCV can warp: width and height below this (remap's coordinates are 16-bit).
+constexpr int kMaxWarpSide = 32767;
+
 /// Pixel maps between the raw and the pinhole image of one camera, built on the first call for a
 /// K and D and rebuilt only when they change, then applied to every frame (remap). Depth is taken
 /// from the nearest pixel (never a mix of two surfaces' depths: z along the optical axis does not
@@ -44,7 +47,8 @@ class LensWarp {
   LensWarp& operator=(const LensWarp&) = delete;
 
   /// Raw (as the lens forms it) to pinhole, in place. False, nothing changed, when the image's
-  /// size is not K's or D has a problem(); true and nothing done when D has no distortion.
+  /// size is not K's, D has a problem() or the image is too large to warp (kMaxWarpSide); true
+  /// and nothing done when D has no distortion.
   bool rectifyDepth(const PinholeIntrinsics& K, const LensDistortion& D, std::vector<float>* depth);
   bool rectifyGrey(const PinholeIntrinsics& K, const LensDistortion& D,
                    std::vector<std::uint8_t>* grey);
