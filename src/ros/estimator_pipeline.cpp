@@ -117,7 +117,11 @@ EstimatorPipeline::Outcome EstimatorPipeline::process(const sensor_msgs::Image& 
     return drop(FrameDrop::kBadDepth);
   }
   if (!selector_.select(pose.T_odom_cam)) return Outcome::kNotKeyframe;
-  camera_.rectifyDepth(&depth_);  // a distorted camera's depth made pinhole (sizes checked above)
+  // A distorted camera's depth made pinhole (sizes checked above; OpenCV failing is reported).
+  if (!camera_.rectifyDepth(&depth_)) {
+    last_camera_error_ = "the depth could not be rectified with camera_info's distortion";
+    return drop(FrameDrop::kBadCameraInfo);
+  }
   Keyframe kf;
   kf.stamp_s = stamp_s;
   kf.K = K;
