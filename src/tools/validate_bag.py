@@ -185,6 +185,8 @@ class CameraInfoStats(TopicStats):
         TopicStats.__init__(self, topic, ('sensor_msgs/CameraInfo',))
         self.sizes = collections.Counter()
         self.bad_focal = []              # (index, fx, fy)
+        self.bad_lens = []               # (index, why): a distortion the estimator cannot rectify
+        self.lenses = collections.Counter()
         self.stamps = []
 
     def add_info(self, msg, rec):
@@ -196,6 +198,26 @@ class CameraInfoStats(TopicStats):
         fx, fy = msg.K[0], msg.K[4]
         if not (math.isfinite(fx) and math.isfinite(fy)) or fx == 0.0 or fy == 0.0:
             self.bad_focal.append((index, fx, fy))
+        why = lens_problem(msg.distortion_model, list(msg.D))
+        if why:
+            self.bad_lens.append((index, why))
+        elif any(d != 0.0 for d in msg.D):
+            self.lenses[msg.distortion_model] += 1
+
+
+def lens_problem(model, D):
+    """Why GeoFusion would drop frames with this distortion (ros/conversions.h's
+    lensFromCameraInfo), or None."""
+    if all(d == 0.0 for d in D):
+        return None
+    expected = {'plumb_bob': 5, 'rational_polynomial': 8}.get(model)
+    if expected is None:
+        return "distortion model '%s' is not supported" % model
+    if len(D) != expected:
+        return '%s with %d coefficients (it takes %d)' % (model, len(D), expected)
+    if not all(math.isfinite(d) for d in D):
+        return 'a distortion coefficient is not finite'
+    return None
 
 
 class DetectionStats(TopicStats):
@@ -552,6 +574,15 @@ def check_camera_info(report, rec):
                        '%d of %d camera_info messages have a zero or non-finite focal length: %s'
                        % (len(info.bad_focal), info.count,
                           examples('message %d: fx=%g fy=%g' % b for b in info.bad_focal)))
+    if info.bad_lens:
+        report.problem(len(info.bad_lens), info.count, info.topic,
+                       '%d of %d camera_info messages have a lens the estimator cannot rectify '
+                       '(their frames are dropped as unusable camera_info): %s'
+                       % (len(info.bad_lens), info.count,
+                          examples('message %d: %s' % b for b in info.bad_lens)))
+    elif info.lenses:
+        report.ok(info.topic, 'lens distortion %s: the images are rectified with it'
+                  % describe_counter(info.lenses, str))
     image_sizes = set(rec.rgb.sizes or rec.depth.sizes)   # camera_info describes the RGB camera
     if image_sizes:
         bad = {s: n for s, n in info.sizes.items() if s not in image_sizes}

@@ -126,6 +126,29 @@ class ValidateBagTest(unittest.TestCase):
         self.assertIn('%.2f s' % (last_image - last_tf), found[0])
         self.assertIn('14 images', found[0])
 
+    def with_camera_info(self, name, model, D):
+        """A copy of the clean bag whose camera_info says this lens."""
+        out = self.scratch(name + '.bag')
+        with rosbag.Bag(self.clean) as inp, rosbag.Bag(out, 'w') as bag:
+            for topic, msg, t in inp.read_messages():
+                if msg._type == 'sensor_msgs/CameraInfo':
+                    msg.distortion_model, msg.D = model, D
+                bag.write(topic, msg, t)
+        return out
+
+    def test_lens_distortion(self):
+        # A plumb_bob lens is rectified: said, no problem.
+        code, lines, err = run(self.with_camera_info('plumb_bob', 'plumb_bob',
+                                                     [0.2312, -0.7849, -0.0033, -0.0001, 0.9172]))
+        self.assertEqual(code, 0, '\n'.join(lines) + err)
+        self.assertTrue(lines_with(lines, ('OK',), 'lens distortion plumb_bob'), '\n'.join(lines))
+        # A fisheye lens would drop every frame: an error naming the model.
+        code, lines, _ = run(self.with_camera_info('fisheye', 'equidistant', [0.1, 0.01, 0, 0]))
+        self.assertNotEqual(code, 0, '\n'.join(lines))
+        found = lines_with(lines, ('ERROR',), "'equidistant' is not supported")
+        self.assertEqual(len(found), 1, '\n'.join(lines))
+        self.assertIn('unusable camera_info', found[0])
+
     def test_malformed_detections(self):
         bag, gt = self.make('malformed', '--frames', 20, '--malformed-every', 3)
         code, lines, _ = run(bag)
