@@ -39,7 +39,8 @@ done
 say "no installed program reads from the source tree"
 
 # From here on only the install space: a fresh environment without the devel space.
-env -i HOME="$HOME" PATH=/usr/bin:/bin ROS_HOME="$work/ros" bash -c '
+env -i HOME="$HOME" PATH=/usr/bin:/bin ROS_HOME="$work/ros" \
+    GEOFUSION_SANITIZER_PRELOAD="${GEOFUSION_SANITIZER_PRELOAD:-}" bash -c '
   set -euo pipefail
   prefix="$1"; work="$2"
   set +u; source "$prefix/setup.bash"; set -u
@@ -57,8 +58,9 @@ env -i HOME="$HOME" PATH=/usr/bin:/bin ROS_HOME="$work/ros" bash -c '
 assert e[\"final_map\"][\"matched\"] > 0, e[\"final_map\"]; \
 assert e[\"config\"][\"method\"] == \"geofusion\"; \
 print(\"check_install: run from the install space: %d objects matched, config recorded\" % e[\"final_map\"][\"matched\"])" "$work/eval.json"
-  # The Python module from the install space, with the installed configuration template.
-  /usr/bin/python3 -c "import sys, geofusion.core as gf; \
+  # The Python module from the install space, with the installed configuration template (under
+  # scripts/test_asan.sh with the sanitizer runtimes preloaded: the interpreter is not instrumented).
+  LD_PRELOAD="$GEOFUSION_SANITIZER_PRELOAD" ASAN_OPTIONS=detect_leaks=0 /usr/bin/python3 -c "import sys, geofusion.core as gf; \
 assert gf.__file__.startswith(sys.argv[1]), gf.__file__; \
 e = gf.SceneEstimator(gf.load_model_set(), sys.argv[2]); \
 print(\"check_install: geofusion.core from %s, method %s\" % (gf.__file__, e.method))" \

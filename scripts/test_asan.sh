@@ -92,6 +92,11 @@ chmod +x "$wrapper"
 found_node=$(/usr/bin/python3 -c 'import roslib.packages; print(roslib.packages.find_node("nodelet", "nodelet"))')
 [ "$found_node" = "['$wrapper']" ] || { say "roslaunch would start $found_node, not $wrapper"; exit 1; }
 
+# Python processes that import the instrumented geofusion.core (ctest python_module, check_install)
+# preload the same runtimes (test/python/run_pytest.sh); other Python stays as it is.
+export GEOFUSION_SANITIZER_PRELOAD="${runtimes// /:}"
+GEOFUSION_SANITIZER_PRELOAD="${GEOFUSION_SANITIZER_PRELOAD%:}"
+
 # Sanitizer settings for every process of the run. halt_on_error: the first error ends the
 # process (UBSan: -fno-sanitize-recover at compile time as well).
 reports="$GEOFUSION_WS/sanitizer_reports"
