@@ -92,6 +92,22 @@ chmod +x "$wrapper"
 found_node=$(/usr/bin/python3 -c 'import roslib.packages; print(roslib.packages.find_node("nodelet", "nodelet"))')
 [ "$found_node" = "['$wrapper']" ] || { say "roslaunch would start $found_node, not $wrapper"; exit 1; }
 
+# The same for rviz, which loads the instrumented map panel (libgeofusion_rviz.so): without the
+# runtimes first the plugin does not load ("ASan runtime does not come first"). Qt's and OGRE's
+# allocations at rviz's exit are not checked for leaks (rviz itself is not instrumented).
+rviz_wrapper="$GEOFUSION_WS/devel/lib/rviz/rviz"
+mkdir -p "$(dirname "$rviz_wrapper")"
+cat > "$rviz_wrapper" <<WRAPPER
+#!/bin/sh
+# Written by scripts/test_asan.sh: Debian's rviz with the sanitizer runtimes loaded first.
+echo "\$\$ rviz \$*" >> "$wrapper_log"
+ASAN_OPTIONS="\${ASAN_OPTIONS:-}:detect_leaks=0" LD_PRELOAD="$runtimes\${LD_PRELOAD:-}" \\
+  exec /usr/lib/rviz/rviz "\$@"
+WRAPPER
+chmod +x "$rviz_wrapper"
+found_rviz=$(/usr/bin/python3 -c 'import roslib.packages; print(roslib.packages.find_node("rviz", "rviz"))')
+[ "$found_rviz" = "['$rviz_wrapper']" ] || { say "roslaunch would start $found_rviz, not $rviz_wrapper"; exit 1; }
+
 # Python processes that import the instrumented geofusion.core (ctest python_module, check_install)
 # preload the same runtimes (test/python/run_pytest.sh); other Python stays as it is.
 export GEOFUSION_SANITIZER_PRELOAD="${runtimes// /:}"
