@@ -105,8 +105,9 @@ ASAN_OPTIONS="\${ASAN_OPTIONS:-}:detect_leaks=0" LD_PRELOAD="$runtimes\${LD_PREL
   exec /usr/lib/rviz/rviz "\$@"
 WRAPPER
 chmod +x "$rviz_wrapper"
-found_rviz=$(/usr/bin/python3 -c 'import roslib.packages; print(roslib.packages.find_node("rviz", "rviz"))')
-[ "$found_rviz" = "['$rviz_wrapper']" ] || { say "roslaunch would start $found_rviz, not $rviz_wrapper"; exit 1; }
+# (rviz's own share folder holds a second "rviz"; roslaunch starts the first match.)
+found_rviz=$(/usr/bin/python3 -c 'import roslib.packages; print(roslib.packages.find_node("rviz", "rviz")[0])')
+[ "$found_rviz" = "$rviz_wrapper" ] || { say "roslaunch would start $found_rviz, not $rviz_wrapper"; exit 1; }
 
 # Python processes that import the instrumented geofusion.core (ctest python_module, check_install)
 # preload the same runtimes (test/python/run_pytest.sh); other Python stays as it is.
