@@ -96,10 +96,10 @@ LensWarp::~LensWarp() = default;
 bool LensWarp::warp(const PinholeIntrinsics& K, const LensDistortion& D, bool rectify, int type,
                     bool nearest, void* data, std::size_t size) {
   if (!K.valid() || !D.problem().empty()) return false;
-  if (K.width >= kMaxWarpSide || K.height >= kMaxWarpSide) return !D.any();
   const cv::Mat probe(1, 1, type);
   if (size != static_cast<std::size_t>(K.width) * K.height * probe.elemSize()) return false;
   if (!D.any()) return true;
+  if (K.width >= kMaxWarpSide || K.height >= kMaxWarpSide) return false;  // remap's limit
   std::unique_ptr<Maps>& maps = rectify ? rectify_ : distort_;
   if (!maps || !sameCamera(maps->K, K) || maps->D != D.D) {
     maps = std::make_unique<Maps>();
