@@ -95,13 +95,17 @@ found_node=$(/usr/bin/python3 -c 'import roslib.packages; print(roslib.packages.
 # The same for rviz, which loads the instrumented map panel (libgeofusion_rviz.so): without the
 # runtimes first the plugin does not load ("ASan runtime does not come first"). Qt's and OGRE's
 # allocations at rviz's exit are not checked for leaks (rviz itself is not instrumented).
+# LC_ALL=C: under a UTF-8 locale Mesa's GLX driver deadlocks in its drirc parsing when ASan's
+# regcomp interceptor is loaded (glibc's __libc_setlocale_lock, taken again by mbrtowc; seen as
+# rviz hanging after "Forcing OpenGl version 0" and the map panel never starting). The C locale's
+# conversions need no loading, so that lock is never taken there.
 rviz_wrapper="$GEOFUSION_WS/devel/lib/rviz/rviz"
 mkdir -p "$(dirname "$rviz_wrapper")"
 cat > "$rviz_wrapper" <<WRAPPER
 #!/bin/sh
 # Written by scripts/test_asan.sh: Debian's rviz with the sanitizer runtimes loaded first.
 echo "\$\$ rviz \$*" >> "$wrapper_log"
-ASAN_OPTIONS="\${ASAN_OPTIONS:-}:detect_leaks=0" LD_PRELOAD="$runtimes\${LD_PRELOAD:-}" \\
+LC_ALL=C ASAN_OPTIONS="\${ASAN_OPTIONS:-}:detect_leaks=0" LD_PRELOAD="$runtimes\${LD_PRELOAD:-}" \\
   exec /usr/lib/rviz/rviz "\$@"
 WRAPPER
 chmod +x "$rviz_wrapper"

@@ -39,6 +39,10 @@ class FaultTest(unittest.TestCase):
             self.warnings.clear()
         return frames, warnings
 
+    def received(self):
+        with self.lock:
+            return len(self.frames)
+
     def warned(self, warnings, *needles):
         return [w for _, w in warnings if all(n in w for n in needles)]
 
@@ -86,9 +90,11 @@ class FaultTest(unittest.TestCase):
                         'no warning about inputs that never synchronise: %s' % warnings)
 
         util.play(bag_c)
-        time.sleep(1.0)
+        expected = len(gt_c['frames']) - 1
+        util.wait_until(lambda: self.received() >= expected)
+        time.sleep(0.5)  # any later frame
         frames, _ = self.take()
-        self.assertGreaterEqual(len(frames), len(gt_c['frames']) - 1,
+        self.assertGreaterEqual(len(frames), expected,
                                 'the viewer did not recover after the faults')
 
 

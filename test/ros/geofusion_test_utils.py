@@ -52,6 +52,23 @@ def wait_for_graph(subscribed_topics, published_topics, timeout_s=30.0):
     return False
 
 
+def wait_until(condition, timeout_s=15.0, poll_s=0.1):
+    """Waits (wall time) until condition() is true or timeout_s passed; returns condition().
+    For what arrives after a replay ends: a process that is slower than usual (an instrumented
+    build, a loaded machine) delivers late, not less."""
+    deadline = time.time() + timeout_s
+    while time.time() < deadline and not condition():
+        time.sleep(poll_s)
+    return condition()
+
+
+def throughput_rate(rate):
+    """The replay rate for a test whose pass depends on how fast the code runs (the estimator must
+    keep up, or fall behind by a bounded amount): rate divided by GEOFUSION_TEST_SLOWDOWN, which
+    scripts/test_asan.sh sets for its instrumented build (several times slower); 1 otherwise."""
+    return rate / float(os.environ.get('GEOFUSION_TEST_SLOWDOWN', '1'))
+
+
 def play(bag, rate=1.0):
     """Plays a bag with --clock (the tests run with /use_sim_time) and waits for the end."""
     subprocess.check_call(['rosbag', 'play', '--clock', '-q', '-d', '1', '-r', str(rate), bag])

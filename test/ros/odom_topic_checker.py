@@ -74,7 +74,7 @@ class OdomTopicTest(unittest.TestCase):
                                             [NS + '/object_map']),
                         'the estimator did not come up')
         time.sleep(1.0)
-        util.play(without, rate=rate)
+        util.play(without, rate=util.throughput_rate(rate))
         time.sleep(2.0)
         with self.lock:
             maps = list(self.maps)
