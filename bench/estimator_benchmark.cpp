@@ -4,7 +4,7 @@
 // benchmark tool's.
 //
 //   estimator_benchmark [--models DIR] [--objects 18] [--keyframes 100] [--seed 101]
-//                       [--detector PRESET] [--threads N] [--pipelined]
+//                       [--detector PRESET]
 //
 // DIR holds the YCB-Video models (default ../shared/data/ycb_video beside the source tree);
 // without them the built-in primitives are used and the output says so.
@@ -37,7 +37,6 @@ struct Options {
   std::string detector = "densefusion", only;
   ConsistencyConfig consistency;
   AssociationConfig association;
-  bool pipelined = false;  ///< stage_one.pipelined
 };
 
 // False, the usage printed, on an option it does not know.
@@ -56,8 +55,6 @@ bool parse(int argc, char** argv, Options* o) {
       o->consistency.outlier.centre = std::atof(argv[++i]);
     } else if (a == "--threads" && i + 1 < argc) {
       o->consistency.threads = std::atoi(argv[++i]);
-    } else if (a == "--pipelined") {
-      o->pipelined = true;
     } else if (a == "--eps-fp" && i + 1 < argc) {
       o->association.eps_fp = std::atof(argv[++i]);
     } else if (a == "--eps-new" && i + 1 < argc) {
@@ -77,7 +74,7 @@ bool parse(int argc, char** argv, Options* o) {
                    "usage: %s [--models DIR] [--objects N] [--keyframes N] [--seed S] "
                    "[--detector PRESET] [--method NAME] [--eps-res M] [--eps-out M] "
                    "[--inlier-centre X] [--outlier-centre X] [--eps-fp X] [--eps-new X] "
-                   "[--threads N] [--pipelined]\n",
+                   "[--threads N]\n",
                    argv[0]);
       return false;
     }
@@ -235,7 +232,6 @@ void benchmarkMethod(Method method, const Options& opts, const ModelSet& models,
   config.method = method;
   config.consistency = opts.consistency;
   config.association = opts.association;
-  config.stage_one.pipelined = opts.pipelined;
   SceneEstimator estimator(models, config, shared);
   StageTimes timings;
   std::vector<std::vector<double>> object_consistency(scene.objects.size());

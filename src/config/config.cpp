@@ -348,10 +348,6 @@ class Table {
          "older keyframes leave the problem, their measurements kept as object priors (cost "
          "bounded by the window)",
          [f](GeoFusionConfig& c) { return &f(c)->marginalise_outside_window; });
-    flag("stage_one.pipelined",
-         "solve beside the next keyframe's scoring, applied and reported at the next keyframe "
-         "(off the keyframe's path; the same result whatever the timing)",
-         [f](GeoFusionConfig& c) { return &f(c)->pipelined; });
     flag("stage_one.adapt_noise",
          "GeoFusion: odometry and per-object measurement noise from the residuals of each solve",
          [f](GeoFusionConfig& c) { return &f(c)->adapt_noise; });

@@ -12,8 +12,6 @@
 #include <cctype>
 #include <chrono>
 #include <cmath>
-#include <exception>
-#include <future>
 
 namespace geofusion {
 namespace {
@@ -98,40 +96,6 @@ bool parseDetectionDecision(const std::string& name, DetectionDecision* decision
   return parseIn(kDecisionNames, name, decision);
 }
 
-// Stage I's problem at one keyframe, on copies of what it reads, so that it can be solved in
-// another thread while the estimator goes on; applyStageOne writes its answer back.
-struct SceneEstimator::StageOneJob {
-  std::size_t cameras = 0;  // T_map_cam_.size() when built: applied only to the same map
-  StageOneConfig config;
-  bool adapt_noise = false;
-  std::vector<Eigen::Isometry3d> T_map_cam, T_odom_cam, objects;
-  std::vector<Eigen::Isometry3d> objects_before;  // the objects' stage I poses it started from
-  std::vector<const ObjectModel*> models;
-  std::vector<FoldedMeasurements> folded;
-  std::vector<StageOneMeasurement> measurements;
-  std::vector<std::size_t> reported;                         // objects[i] is tracks_[reported[i]]
-  std::vector<std::pair<std::size_t, std::size_t>> sources;  // (track, observation)
-  StageOneSummary summary;
-  StageOneResiduals residuals;  // under unit weights after a usable solve (noise adaptation)
-  std::future<void> running;
-
-  void solve() {
-    try {
-      summary =
-          optimizeStageOne(&T_map_cam, T_odom_cam, &objects, models, measurements, config, &folded);
-      if (!summary.solved || !adapt_noise) return;
-      std::vector<StageOneMeasurement> unit = measurements;
-      for (StageOneMeasurement& m : unit) m.weight = 1.0;
-      residuals = stageOneResiduals(T_map_cam, T_odom_cam, objects, models, unit, config,
-                                    firstKeyframeInProblem(T_map_cam.size(), config));
-    } catch (const std::exception& e) {  // reported as a failed solve, the map left as it was
-      summary = StageOneSummary();
-      summary.status = SolveStatus::kFailed;
-      summary.message = e.what();
-    }
-  }
-};
-
 SceneEstimator::SceneEstimator(const ModelSet& models, const EstimatorConfig& config,
                                std::shared_ptr<OffscreenRenderer> renderer)
     : config_(config), stages_(stagesOf(config.method)), monitor_(config.monitor) {
@@ -187,8 +151,6 @@ bool SceneEstimator::resume(const std::vector<ObjectEstimate>& objects,
 }
 
 void SceneEstimator::reset() {
-  if (pending_stage_one_) pending_stage_one_->running.wait();
-  pending_stage_one_.reset();
   T_map_odom_start_ = Eigen::Isometry3d::Identity();
   relocalisation_anchor_ = 0;
   T_odom_fix_ = Eigen::Isometry3d::Identity();
@@ -285,13 +247,11 @@ KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
   const auto start = Clock::now();
   StageTimings timings;
   const int t = static_cast<int>(T_map_cam_.size());
-  // Scoring reads the keyframe only: it runs while a pipelined stage I solve finishes, which is
-  // then applied before anything reads the map.
+  appendCameraPose(kf);
+
   auto t0 = Clock::now();
   const ScoredDetections detections = scoreDetections(kf);
   timings.consistency_ms = msSince(t0);
-  StageReport stage_one = collectStageOne(&timings);
-  appendCameraPose(kf);
 
   t0 = Clock::now();
   Relocalisation relocalisation;
@@ -331,15 +291,11 @@ KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
   }
   timings.lifecycle_ms = msSince(t0);
 
-  StageReport stage_two;
+  StageReport stage_one, stage_two;
   if (stages_.stage_one && stageOneDue(t)) {
-    if (config_.stage_one.pipelined) {
-      startStageOne();  // applied and reported at the next keyframe (or finish())
-    } else {
-      t0 = Clock::now();
-      stage_one = runStageOne();
-      timings.stage_one_ms = msSince(t0);
-    }
+    t0 = Clock::now();
+    stage_one = runStageOne();
+    timings.stage_one_ms = msSince(t0);
   }
   if (stages_.relations_and_stage_two) stage_two = runRelationsAndStageTwo(&kf, &timings);
 
@@ -594,19 +550,22 @@ std::vector<std::size_t> SceneEstimator::reportedTracks() const {
   return out;
 }
 
-std::unique_ptr<SceneEstimator::StageOneJob> SceneEstimator::buildStageOne() {
-  auto job = std::make_unique<StageOneJob>();
-  StageOneConfig& config = job->config;
-  config = config_.stage_one;
+StageReport SceneEstimator::runStageOne() {
+  StageOneConfig config = config_.stage_one;
   config.odometry_sigma_position_m *= std::sqrt(odometry_variance_);
   config.odometry_sigma_rotation_rad *= std::sqrt(odometry_variance_);
   // Marginalising outside the window, the observations of cameras before the window's anchor
   // are folded into their object's prior once, and stage I and the noise adaptation see the
   // window's only.
   const int first = static_cast<int>(firstKeyframeInProblem(T_map_cam_.size(), config));
-  job->reported = reportedTracks();
-  for (std::size_t i = 0; i < job->reported.size(); ++i) {
-    Track& tr = tracks_[job->reported[i]];
+  std::vector<Eigen::Isometry3d> objects;
+  std::vector<const ObjectModel*> models;
+  std::vector<FoldedMeasurements> folded;
+  std::vector<StageOneMeasurement> measurements;
+  std::vector<std::pair<std::size_t, std::size_t>> sources;  // (track, observation)
+  const std::vector<std::size_t> reported = reportedTracks();
+  for (std::size_t i = 0; i < reported.size(); ++i) {
+    Track& tr = tracks_[reported[i]];
     for (std::size_t k = 0; k < tr.observations.size(); ++k) {
       Observation& o = tr.observations[k];
       if (o.folded) continue;
@@ -619,59 +578,21 @@ std::unique_ptr<SceneEstimator::StageOneJob> SceneEstimator::buildStageOne() {
         o.folded = true;
         continue;
       }
-      job->measurements.push_back(m);
-      job->sources.emplace_back(job->reported[i], k);
+      measurements.push_back(m);
+      sources.emplace_back(reported[i], k);
     }
-    job->objects.push_back(tr.T_stage_one);
-    job->models.push_back(tr.model.get());
-    job->folded.push_back(tr.folded);
+    objects.push_back(tr.T_stage_one);
+    models.push_back(tr.model.get());
+    folded.push_back(tr.folded);
   }
-  job->objects_before = job->objects;
-  job->cameras = T_map_cam_.size();
-  job->T_map_cam = T_map_cam_;
-  job->T_odom_cam = T_odom_cam_;
-  job->adapt_noise = stages_.stage_one_noise_adaptation && config_.stage_one.adapt_noise;
-  return job;
-}
-
-StageReport SceneEstimator::applyStageOne(const StageOneJob& job, bool carry_refined) {
-  const StageOneSummary& s = job.summary;
-  if (job.cameras != T_map_cam_.size()) return {SolveStatus::kBadInput, s.iterations, 0.0, 0.0};
+  const StageOneSummary s =
+      optimizeStageOne(&T_map_cam_, T_odom_cam_, &objects, models, measurements, config, &folded);
   if (s.solved) {
-    std::copy(job.T_map_cam.begin(), job.T_map_cam.end(), T_map_cam_.begin());
-    for (std::size_t i = 0; i < job.reported.size(); ++i) {
-      Track& tr = tracks_[job.reported[i]];
-      tr.T_stage_one = job.objects[i];
-      // Applied a keyframe late, no stage II follows before the next association: the refined
-      // pose moves with its stage I pose, so that the map agrees with the corrected cameras.
-      if (carry_refined)
-        tr.T_refined = job.objects[i] * job.objects_before[i].inverse() * tr.T_refined;
-    }
-    if (job.adapt_noise) adaptNoise(job);
+    for (std::size_t i = 0; i < reported.size(); ++i) tracks_[reported[i]].T_stage_one = objects[i];
+    if (stages_.stage_one_noise_adaptation && config_.stage_one.adapt_noise)
+      adaptNoise(reported, objects, models, measurements, sources);
   }
   return {s.status, s.iterations, s.initial_cost, s.final_cost};
-}
-
-StageReport SceneEstimator::runStageOne() {
-  const std::unique_ptr<StageOneJob> job = buildStageOne();
-  job->solve();
-  return applyStageOne(*job, false);
-}
-
-void SceneEstimator::startStageOne() {
-  pending_stage_one_ = buildStageOne();
-  StageOneJob* job = pending_stage_one_.get();
-  job->running = std::async(std::launch::async, [job] { job->solve(); });
-}
-
-StageReport SceneEstimator::collectStageOne(StageTimings* timings) {
-  if (!pending_stage_one_) return {};
-  const auto t0 = Clock::now();
-  pending_stage_one_->running.wait();
-  if (timings) timings->stage_one_ms = msSince(t0);
-  const StageReport report = applyStageOne(*pending_stage_one_, true);
-  pending_stage_one_.reset();
-  return report;
 }
 
 // Variance component estimation from the residuals of the solve (under the configured noise):
@@ -679,26 +600,32 @@ StageReport SceneEstimator::collectStageOne(StageTimings* timings) {
 // from the median over its measurements (looser only); a measurement beyond the gate under its
 // object's noise is left out of the next solve. Medians of chi-square(6) residuals, 5.35 when the
 // configured noise is right.
-void SceneEstimator::adaptNoise(const StageOneJob& job) {
+void SceneEstimator::adaptNoise(const std::vector<std::size_t>& reported,
+                                const std::vector<Eigen::Isometry3d>& objects,
+                                const std::vector<const ObjectModel*>& models,
+                                const std::vector<StageOneMeasurement>& measurements,
+                                const std::vector<std::pair<std::size_t, std::size_t>>& sources) {
   const StageOneConfig& c = config_.stage_one;
   constexpr double kMedianChi2of6 = 5.35;
-  const StageOneResiduals& r = job.residuals;
-  if (r.measurements.size() != job.measurements.size()) return;
+  std::vector<StageOneMeasurement> unit = measurements;
+  for (StageOneMeasurement& m : unit) m.weight = 1.0;
+  const StageOneResiduals r = stageOneResiduals(T_map_cam_, T_odom_cam_, objects, models, unit, c,
+                                                firstKeyframeInProblem(T_map_cam_.size(), c));
   if (!r.odometry.empty()) {
     odometry_variance_ = std::clamp(percentile(r.odometry, 0.5) / kMedianChi2of6,
                                     c.min_odometry_variance_factor, 1.0);
   }
-  std::vector<std::vector<double>> per_object(job.reported.size());
-  for (std::size_t i = 0; i < job.measurements.size(); ++i)
-    per_object[static_cast<std::size_t>(job.measurements[i].object)].push_back(r.measurements[i]);
-  for (std::size_t j = 0; j < job.reported.size(); ++j) {
+  std::vector<std::vector<double>> per_object(reported.size());
+  for (std::size_t i = 0; i < measurements.size(); ++i)
+    per_object[static_cast<std::size_t>(measurements[i].object)].push_back(r.measurements[i]);
+  for (std::size_t j = 0; j < reported.size(); ++j) {
     if (per_object[j].empty()) continue;
-    tracks_[job.reported[j]].variance = std::clamp(percentile(per_object[j], 0.5) / kMedianChi2of6,
-                                                   1.0, c.max_object_variance_factor);
+    tracks_[reported[j]].variance = std::clamp(percentile(per_object[j], 0.5) / kMedianChi2of6, 1.0,
+                                               c.max_object_variance_factor);
   }
-  for (std::size_t i = 0; i < job.measurements.size(); ++i) {
-    Track& tr = tracks_[job.sources[i].first];
-    tr.observations[job.sources[i].second].gated = r.measurements[i] / tr.variance > c.gate_chi2;
+  for (std::size_t i = 0; i < measurements.size(); ++i) {
+    Track& tr = tracks_[sources[i].first];
+    tr.observations[sources[i].second].gated = r.measurements[i] / tr.variance > c.gate_chi2;
   }
 }
 
@@ -817,8 +744,7 @@ StageReport SceneEstimator::runRelationsAndStageTwo(const Keyframe* kf, StageTim
 KeyframeResult SceneEstimator::finish() {
   const auto start = Clock::now();
   StageTimings timings;
-  // A pipelined solve still running is applied first; the final solve starts from it.
-  StageReport stage_one = collectStageOne(nullptr), stage_two;
+  StageReport stage_one, stage_two;
   if (stages_.stage_one && !T_map_cam_.empty()) {
     const auto t0 = Clock::now();
     stage_one = runStageOne();

@@ -210,46 +210,6 @@ TEST(SceneEstimator, ScoringInSeveralThreadsGivesTheResultsOfOne) {
   EXPECT_GT(detections, 100u);
 }
 
-// stage_one.pipelined: the solve started at a stage-I keyframe is applied and reported at the
-// next one; the keyframes before the first solve are those of the solve on the keyframe's path,
-// two pipelined runs are the same bit for bit (the result does not depend on the thread's
-// timing), and the final map keeps its objects and accuracy.
-TEST(SceneEstimator, PipelinedStageOneIsAppliedAtTheNextKeyframe) {
-  const auto pipelined = [](EstimatorConfig* c) { c->stage_one.pipelined = true; };
-  std::vector<KeyframeResult> inline_run, first, second;
-  const Score a = run(Method::kGeoFusion, &inline_run);
-  const Score b = run(Method::kGeoFusion, &first, pipelined);
-  run(Method::kGeoFusion, &second, pipelined);
-  const int every = StageOneConfig().every_n_keyframes;
-  ASSERT_EQ(first.size(), 40u);
-  for (const KeyframeResult& r : first) {
-    const bool after_due = r.keyframe > 0 && r.keyframe % every == 0;
-    EXPECT_EQ(r.stage_one.ran(), after_due) << "kf " << r.keyframe;
-    EXPECT_FALSE(r.stage_one.failed()) << toString(r.stage_one.status);
-    if (r.stage_one.ran()) EXPECT_LE(r.stage_one.final_cost, r.stage_one.initial_cost);
-  }
-  for (std::size_t t = 0; t < first.size(); ++t) {
-    ASSERT_EQ(first[t].objects.size(), second[t].objects.size()) << "kf " << t;
-    EXPECT_TRUE(first[t].T_map_cam.matrix() == second[t].T_map_cam.matrix()) << "kf " << t;
-    for (std::size_t j = 0; j < first[t].objects.size(); ++j) {
-      EXPECT_EQ(first[t].objects[j].id, second[t].objects[j].id);
-      EXPECT_TRUE(first[t].objects[j].T_map_obj.matrix() ==
-                  second[t].objects[j].T_map_obj.matrix());
-    }
-    if (static_cast<int>(t) >= every - 1) continue;  // until the first solve: the same map
-    ASSERT_EQ(first[t].objects.size(), inline_run[t].objects.size()) << "kf " << t;
-    for (std::size_t j = 0; j < first[t].objects.size(); ++j)
-      EXPECT_TRUE(first[t].objects[j].T_map_obj.matrix() ==
-                  inline_run[t].objects[j].T_map_obj.matrix());
-  }
-  std::printf("stage I on the path: %d true, %d false, ADD-S %.2f mm; pipelined: %d, %d, %.2f mm\n",
-              a.true_positives, a.false_positives, 1000 * a.mean_adds_m, b.true_positives,
-              b.false_positives, 1000 * b.mean_adds_m);
-  EXPECT_EQ(b.true_positives, a.true_positives);
-  EXPECT_LE(b.false_positives, a.false_positives);
-  EXPECT_LT(b.mean_adds_m, a.mean_adds_m + 0.0005);
-}
-
 TEST(SceneEstimator, GeoFusionIsMoreAccurateThanFrameByFrame) {
   const Sequence& s = demoSequence();
   // FbF: every keyframe's true-class detections against the truth.

@@ -50,12 +50,6 @@ struct StageOneConfig {
   double min_odometry_variance_factor = 0.01;
   double max_object_variance_factor = 100.0;
   double gate_chi2 = 22.5;
-  /// Solve in a thread of its own, beside the next keyframe's scoring, instead of on the
-  /// keyframe's path: the solve started at keyframe t is applied (and reported) at keyframe t+1,
-  /// before its association, so keyframe t's map, relations and stage II see the poses of the
-  /// solve before. The same result whatever the timing (joined at a fixed point); finish() joins
-  /// it and solves once more.
-  bool pipelined = false;
 };
 
 /// One object measurement z_t^k in stage I: keyframe t observes object j at T_cam_obj.

@@ -254,17 +254,12 @@ class SceneEstimator {
   /// Tracks in the map: confirmed ones (all for methods without false-positive removal).
   std::vector<std::size_t> reportedTracks() const;
   bool stageOneDue(int t) const;
-  struct StageOneJob;
-  /// Stage I in three steps: its problem built from the map (folding the observations that left
-  /// the window), solved on copies (StageOneJob::solve, in any thread), applied to the map.
-  std::unique_ptr<StageOneJob> buildStageOne();
-  /// `carry_refined`: the refined poses move with their stage I poses (no stage II follows).
-  StageReport applyStageOne(const StageOneJob& job, bool carry_refined);
-  StageReport runStageOne();  ///< the three in this thread
-  void startStageOne();       ///< built here, solved in a thread of its own (stage_one.pipelined)
-  /// Waits for a started solve and applies it (its wait in timings); not_run when none.
-  StageReport collectStageOne(StageTimings* timings);
-  void adaptNoise(const StageOneJob& job);
+  StageReport runStageOne();
+  void adaptNoise(const std::vector<std::size_t>& reported,
+                  const std::vector<Eigen::Isometry3d>& objects,
+                  const std::vector<const ObjectModel*>& models,
+                  const std::vector<StageOneMeasurement>& measurements,
+                  const std::vector<std::pair<std::size_t, std::size_t>>& sources);
   /// Whether a track is in the local map (stage_two.local_map_keyframes) at the latest keyframe.
   bool recentlySeen(const Track& track) const;
   /// Positions in `reported` of the local map's objects: those recently seen and their contact
@@ -304,9 +299,6 @@ class SceneEstimator {
   /// Pairs in contact at the last keyframe, as track ids (-1 = the support), for hysteresis.
   std::vector<std::pair<int, int>> held_contacts_;
   std::vector<ObjectEstimate> frame_objects_;  ///< FbF: this keyframe's detections
-  /// A stage I solve running beside the next keyframe (stage_one.pipelined). Last member: it
-  /// points into the models, so it is waited for and destroyed first.
-  std::unique_ptr<StageOneJob> pending_stage_one_;
 };
 
 }  // namespace geofusion
