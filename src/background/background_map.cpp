@@ -26,6 +26,7 @@ struct BackgroundMap::Impl {
   bool inserted_any = false;                                     ///< since the last clear()
   Eigen::Isometry3d T_map_last = Eigen::Isometry3d::Identity();  ///< camera of the last insert
   int passed_over = 0;                                           ///< keyframes not wanted since it
+  int insertions = 0;  ///< since the last clear(): picks the free-space rays' phase
 };
 
 BackgroundMap::BackgroundMap(const BackgroundMapConfig& config,
@@ -47,6 +48,7 @@ BackgroundMap::~BackgroundMap() = default;
 void BackgroundMap::clear() {
   impl_->tree.clear();
   impl_->inserted_any = false;
+  impl_->insertions = 0;
   impl_->passed_over = 0;
 }
 
@@ -152,7 +154,11 @@ int BackgroundMap::insert(const DepthImageView& depth, const PinholeIntrinsics& 
   }
   std::vector<Eigen::Vector3d> points;  // map frame
   std::vector<char> casts;              // whether its ray clears free space
+  // The free-space rays take every f-th sample in each direction, starting at a phase that
+  // steps with each insertion: over f x f insertions every sampled direction clears once.
   const int f = std::max(1, config_.free_space_stride);
+  const int phase = impl_->insertions++ % (f * f);
+  const int phase_i = phase % f, phase_j = phase / f;
   for (int j = 0; j < Ks.height; ++j) {
     for (int i = 0; i < Ks.width; ++i) {
       const std::size_t c = static_cast<std::size_t>(j) * Ks.width + i;
@@ -165,7 +171,7 @@ int BackgroundMap::insert(const DepthImageView& depth, const PinholeIntrinsics& 
         if (!(zo > 0.f) || z > zo - config_.object_margin_m) continue;
       }
       points.push_back(T_map_cam * K.backProject(s * i, s * j, z));
-      casts.push_back(i % f == 0 && j % f == 0);
+      casts.push_back(i % f == phase_i && j % f == phase_j);
     }
   }
   castRays(T_map_cam.translation(), points, casts);

@@ -38,7 +38,8 @@ struct BackgroundMapConfig {
   int max_interval_keyframes = 5;
   /// Free space is cleared along the rays to every free_space_stride-th sample (in each
   /// direction; 1: every sample): the rays converge on the camera, so fewer of them clear
-  /// nearly the same voxels. Every sample still marks its voxel occupied.
+  /// nearly the same voxels. Every sample still marks its voxel occupied. The rays' phase steps
+  /// with each insertion, so that over f x f insertions every sampled direction clears once.
   int free_space_stride = 2;
   /// The object masks render each model simplified to about this many triangles (deviation at
   /// most a quarter voxel).
