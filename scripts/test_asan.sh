@@ -74,44 +74,35 @@ case "$runtimes" in
   *) say "$nodelets is not instrumented (runtimes: '$runtimes'); remove $GEOFUSION_WS and retry"; exit 1 ;;
 esac
 
-# The nodelet wrapper: roslaunch finds <node pkg="nodelet" type="nodelet"> in the first workspace
-# of CMAKE_PREFIX_PATH that has lib/nodelet/nodelet (roslib.packages.find_node), so this one in
-# the sanitizer workspace's devel space comes before Debian's /usr/lib/nodelet/nodelet. Each
-# start leaves a line in its log.
-wrapper="$GEOFUSION_WS/devel/lib/nodelet/nodelet"
+# Wrappers: roslaunch finds <node pkg="P" type="P"> in the first workspace of CMAKE_PREFIX_PATH
+# that has lib/P/P (roslib.packages.find_node, its first match), so a wrapper in the sanitizer
+# workspace's devel space comes before Debian's /usr/lib/P/P and starts it with the sanitizer
+# runtimes loaded first (and the environment given). Each start leaves a line in one log.
 wrapper_log="$GEOFUSION_WS/nodelet_wrapper.log"
 rm -f "$wrapper_log"
-mkdir -p "$(dirname "$wrapper")"
-cat > "$wrapper" <<WRAPPER
+write_wrapper() {  # package, environment assignments for it
+  local pkg="$1" env="$2" path="$GEOFUSION_WS/devel/lib/$1/$1" found
+  mkdir -p "$(dirname "$path")"
+  cat > "$path" <<WRAPPER
 #!/bin/sh
-# Written by scripts/test_asan.sh: Debian's nodelet with the sanitizer runtimes loaded first.
-echo "\$\$ \$*" >> "$wrapper_log"
-LD_PRELOAD="$runtimes\${LD_PRELOAD:-}" exec /usr/lib/nodelet/nodelet "\$@"
+# Written by scripts/test_asan.sh: Debian's $pkg with the sanitizer runtimes loaded first.
+echo "\$\$ $pkg \$*" >> "$wrapper_log"
+$env LD_PRELOAD="$runtimes\${LD_PRELOAD:-}" exec /usr/lib/$pkg/$pkg "\$@"
 WRAPPER
-chmod +x "$wrapper"
-found_node=$(/usr/bin/python3 -c 'import roslib.packages; print(roslib.packages.find_node("nodelet", "nodelet"))')
-[ "$found_node" = "['$wrapper']" ] || { say "roslaunch would start $found_node, not $wrapper"; exit 1; }
-
-# The same for rviz, which loads the instrumented map panel (libgeofusion_rviz.so): without the
-# runtimes first the plugin does not load ("ASan runtime does not come first"). Qt's and OGRE's
-# allocations at rviz's exit are not checked for leaks (rviz itself is not instrumented).
+  chmod +x "$path"
+  found=$(/usr/bin/python3 -c "import roslib.packages; print(roslib.packages.find_node('$pkg', '$pkg')[0])")
+  [ "$found" = "$path" ] || { say "roslaunch would start $found, not $path"; exit 1; }
+}
+# Debian's nodelet manager (not instrumented) loads the instrumented nodelets.
+write_wrapper nodelet ""
+# rviz loads the instrumented map panel (libgeofusion_rviz.so): without the runtimes first the
+# plugin does not load ("ASan runtime does not come first"). Qt's and OGRE's allocations at rviz's
+# exit are not checked for leaks (rviz itself is not instrumented).
 # LC_ALL=C: under a UTF-8 locale Mesa's GLX driver deadlocks in its drirc parsing when ASan's
 # regcomp interceptor is loaded (glibc's __libc_setlocale_lock, taken again by mbrtowc; seen as
 # rviz hanging after "Forcing OpenGl version 0" and the map panel never starting). The C locale's
 # conversions need no loading, so that lock is never taken there.
-rviz_wrapper="$GEOFUSION_WS/devel/lib/rviz/rviz"
-mkdir -p "$(dirname "$rviz_wrapper")"
-cat > "$rviz_wrapper" <<WRAPPER
-#!/bin/sh
-# Written by scripts/test_asan.sh: Debian's rviz with the sanitizer runtimes loaded first.
-echo "\$\$ rviz \$*" >> "$wrapper_log"
-LC_ALL=C ASAN_OPTIONS="\${ASAN_OPTIONS:-}:detect_leaks=0" LD_PRELOAD="$runtimes\${LD_PRELOAD:-}" \\
-  exec /usr/lib/rviz/rviz "\$@"
-WRAPPER
-chmod +x "$rviz_wrapper"
-# (rviz's own share folder holds a second "rviz"; roslaunch starts the first match.)
-found_rviz=$(/usr/bin/python3 -c 'import roslib.packages; print(roslib.packages.find_node("rviz", "rviz")[0])')
-[ "$found_rviz" = "$rviz_wrapper" ] || { say "roslaunch would start $found_rviz, not $rviz_wrapper"; exit 1; }
+write_wrapper rviz 'LC_ALL=C ASAN_OPTIONS="${ASAN_OPTIONS:-}:detect_leaks=0"'
 
 # Python processes that import the instrumented geofusion.core (ctest python_module, check_install)
 # preload the same runtimes (test/python/run_pytest.sh); other Python stays as it is.
@@ -152,7 +143,7 @@ if [ ${#found[@]} -gt 0 ]; then
   say "${#found[@]} sanitizer report(s) in $reports"
   [ $status -ne 0 ] || status=1
 fi
-uses=$(wc -l < "$wrapper_log" 2>/dev/null || echo 0)
+uses=$(grep -c '^[0-9]* nodelet ' "$wrapper_log" 2>/dev/null || true)
 say "nodelet processes started with the sanitizer runtimes preloaded: $uses"
 say "build $build_s s, ctest $run_s s: $([ $status -eq 0 ] && echo clean || echo "FAILED (exit $status)")"
 exit $status
