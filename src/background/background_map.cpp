@@ -14,6 +14,7 @@
 #include <iterator>
 #include <map>
 #include <sstream>
+#include <utility>
 
 namespace geofusion {
 
@@ -192,8 +193,24 @@ octomap::OcTreeKey unpack(std::uint64_t p) {
                             static_cast<octomap::key_type>(p >> 16 & 0xffff),
                             static_cast<octomap::key_type>(p >> 32 & 0xffff));
 }
+// Sorts packed keys (48 bits: three 16-bit key coordinates) and drops repeats. A least
+// significant digit radix sort, one pass a coordinate: the free-space rays give some 10^5 keys
+// an insertion, most of them repeats where the rays converge on the camera, and a comparison
+// sort of them cost as much as octomap's updates of the voxels.
 void sortUnique(std::vector<std::uint64_t>* keys) {
-  std::sort(keys->begin(), keys->end());
+  constexpr int kDigits = 3, kBits = 16;
+  constexpr std::size_t kBuckets = std::size_t(1) << kBits;
+  std::vector<std::uint32_t> count(kDigits * kBuckets, 0);
+  for (std::uint64_t k : *keys)
+    for (int d = 0; d < kDigits; ++d) ++count[d * kBuckets + (k >> (kBits * d) & (kBuckets - 1))];
+  std::vector<std::uint64_t> sorted(keys->size());
+  for (int d = 0; d < kDigits; ++d) {
+    std::uint32_t* c = count.data() + d * kBuckets;
+    std::uint32_t start = 0;
+    for (std::size_t b = 0; b < kBuckets; ++b) start += std::exchange(c[b], start);
+    for (std::uint64_t k : *keys) sorted[c[k >> (kBits * d) & (kBuckets - 1)]++] = k;
+    keys->swap(sorted);
+  }
   keys->erase(std::unique(keys->begin(), keys->end()), keys->end());
 }
 

@@ -1,6 +1,7 @@
 #include "geofusion/estimation/association.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -146,22 +147,26 @@ double boxCollisionRatio(const Eigen::Isometry3d& T_a, const Eigen::Vector3d& ha
                          const Eigen::Isometry3d& T_b, const Eigen::Vector3d& half_b) {
   const Eigen::Matrix3d A = T_a.linear(), B = T_b.linear();
   const Eigen::Vector3d d = T_b.translation() - T_a.translation();
+  // Boxes whose bounding spheres are apart do not overlap (most pairs of a map: no axis test).
+  const double reach = half_a.norm() + half_b.norm();
+  if (d.squaredNorm() > reach * reach) return 0.0;
   // Extent (half length) of a box along a unit axis.
   auto radius = [](const Eigen::Matrix3d& R, const Eigen::Vector3d& half,
                    const Eigen::Vector3d& n) {
     return std::abs(R.col(0).dot(n)) * half.x() + std::abs(R.col(1).dot(n)) * half.y() +
            std::abs(R.col(2).dot(n)) * half.z();
   };
-  std::vector<Eigen::Vector3d> axes;
-  for (int i = 0; i < 3; ++i) axes.push_back(A.col(i)), axes.push_back(B.col(i));
+  std::array<Eigen::Vector3d, 15> axes;
+  std::size_t n_axes = 0;
+  for (int i = 0; i < 3; ++i) axes[n_axes++] = A.col(i), axes[n_axes++] = B.col(i);
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) {
       const Eigen::Vector3d c = A.col(i).cross(B.col(j));
-      if (c.norm() > 1e-6) axes.push_back(c.normalized());
+      if (c.norm() > 1e-6) axes[n_axes++] = c.normalized();
     }
   }
   double ratio = 1.0;
-  for (std::size_t k = 0; k < axes.size(); ++k) {
+  for (std::size_t k = 0; k < n_axes; ++k) {
     const Eigen::Vector3d& n = axes[k];
     const double ra = radius(A, half_a, n), rb = radius(B, half_b, n);
     const double centre = d.dot(n);
