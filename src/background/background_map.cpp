@@ -1,5 +1,7 @@
 #include "geofusion/background/background_map.h"
 
+#include "geofusion/background/octree_update.h"
+
 #include "geofusion/render/renderer.h"
 
 #include "geofusion/common/atomic_file.h"
@@ -183,45 +185,13 @@ int BackgroundMap::insert(const DepthImageView& depth, const PinholeIntrinsics& 
   return static_cast<int>(points.size());
 }
 
-namespace {
-
-std::uint64_t pack(const octomap::OcTreeKey& k) {
-  return std::uint64_t(k[0]) | std::uint64_t(k[1]) << 16 | std::uint64_t(k[2]) << 32;
-}
-octomap::OcTreeKey unpack(std::uint64_t p) {
-  return octomap::OcTreeKey(static_cast<octomap::key_type>(p & 0xffff),
-                            static_cast<octomap::key_type>(p >> 16 & 0xffff),
-                            static_cast<octomap::key_type>(p >> 32 & 0xffff));
-}
-// Sorts packed keys (48 bits: three 16-bit key coordinates) and drops repeats. A least
-// significant digit radix sort, one pass a coordinate: the free-space rays give some 10^5 keys
-// an insertion, most of them repeats where the rays converge on the camera, and a comparison
-// sort of them cost as much as octomap's updates of the voxels.
-void sortUnique(std::vector<std::uint64_t>* keys) {
-  constexpr int kDigits = 3, kBits = 16;
-  constexpr std::size_t kBuckets = std::size_t(1) << kBits;
-  std::vector<std::uint32_t> count(kDigits * kBuckets, 0);
-  for (std::uint64_t k : *keys)
-    for (int d = 0; d < kDigits; ++d) ++count[d * kBuckets + (k >> (kBits * d) & (kBuckets - 1))];
-  std::vector<std::uint64_t> sorted(keys->size());
-  for (int d = 0; d < kDigits; ++d) {
-    std::uint32_t* c = count.data() + d * kBuckets;
-    std::uint32_t start = 0;
-    for (std::size_t b = 0; b < kBuckets; ++b) start += std::exchange(c[b], start);
-    for (std::uint64_t k : *keys) sorted[c[k >> (kBits * d) & (kBuckets - 1)]++] = k;
-    keys->swap(sorted);
-  }
-  keys->erase(std::unique(keys->begin(), keys->end()), keys->end());
-}
-
-}  // namespace
-
 // octomap's discretised scan insertion (insertPointCloud with discretize: each endpoint voxel
 // once, rays cast to the voxels' centres, free voxels that are also endpoints left occupied,
-// rays longer than max_range_m cut there with no endpoint), with the keys gathered in sorted
-// arrays rather than octomap's hash sets (one allocation a key), and the free space cast from
-// the `casts` points' voxels only: the endpoints stay dense where the rays, converging on the
-// camera, need not be.
+// rays longer than max_range_m cut there with no endpoint), with the keys gathered in arrays of
+// Morton codes sorted by a radix sort rather than octomap's hash sets (one allocation a key), the
+// voxels updated a subtree at a time (octree_update.h: octomap's tree, each node visited once
+// rather than once a key), and the free space cast from the `casts` points' voxels only: the
+// endpoints stay dense where the rays, converging on the camera, need not be.
 void BackgroundMap::castRays(const Eigen::Vector3d& origin,
                              const std::vector<Eigen::Vector3d>& points,
                              const std::vector<char>& casts) {
@@ -237,8 +207,8 @@ void BackgroundMap::castRays(const Eigen::Vector3d& origin,
                              static_cast<float>(p.z())),
             key))
       continue;
-    if ((p - origin).norm() <= config_.max_range_m) occupied.push_back(pack(key));
-    if (casts[i]) rays.push_back(pack(key));
+    if ((p - origin).norm() <= config_.max_range_m) occupied.push_back(mortonCode(key));
+    if (casts[i]) rays.push_back(mortonCode(key));
   }
   sortUnique(&occupied);
   sortUnique(&rays);
@@ -246,26 +216,28 @@ void BackgroundMap::castRays(const Eigen::Vector3d& origin,
                            static_cast<float>(origin.z()));
   octomap::KeyRay ray;
   for (std::uint64_t r : rays) {
-    octomap::point3d end = tree.keyToCoord(unpack(r));
+    octomap::point3d end = tree.keyToCoord(keyOfMortonCode(r));
     const octomap::point3d dir = end - o;
     if (dir.norm() > config_.max_range_m)
       end = o + dir.normalized() * static_cast<float>(config_.max_range_m);
     if (!tree.computeRayKeys(o, end, ray)) continue;
-    for (const octomap::OcTreeKey& k : ray) free.push_back(pack(k));
+    for (const octomap::OcTreeKey& k : ray) free.push_back(mortonCode(k));
   }
   sortUnique(&free);
   std::vector<std::uint64_t> only_free;
   only_free.reserve(free.size());
   std::set_difference(free.begin(), free.end(), occupied.begin(), occupied.end(),
                       std::back_inserter(only_free));
-  for (std::uint64_t k : only_free) {
-    const octomap::OcTreeKey key = unpack(k);
-    if (!bbx || tree.inBBX(key)) tree.updateNode(key, false);
-  }
-  for (std::uint64_t k : occupied) {
-    const octomap::OcTreeKey key = unpack(k);
-    if (!bbx || tree.inBBX(key)) tree.updateNode(key, true);
-  }
+  auto inside = [&](std::vector<std::uint64_t>* codes) {
+    if (!bbx) return;
+    codes->erase(std::remove_if(codes->begin(), codes->end(),
+                                [&](std::uint64_t c) { return !tree.inBBX(keyOfMortonCode(c)); }),
+                 codes->end());
+  };
+  inside(&only_free);
+  inside(&occupied);
+  updateSortedCodes(&tree, only_free, false);
+  updateSortedCodes(&tree, occupied, true);
 }
 
 void BackgroundMap::carve(const std::vector<MaskObject>& objects) {
