@@ -16,7 +16,6 @@
 #include <iterator>
 #include <map>
 #include <sstream>
-#include <utility>
 
 namespace geofusion {
 

@@ -1,5 +1,7 @@
 #include "geofusion/background/octree_update.h"
 
+#include <octomap/OcTree.h>
+
 #include <algorithm>
 #include <utility>
 

@@ -1,13 +1,16 @@
 // Many voxels of an octomap::OcTree updated at once, as octomap's own updateNode would update
 // them one at a time: the background's scan insertion (background_map.cpp) uses it for the free
-// and the occupied voxels of each keyframe. Only the background module and its tests include
-// this header (it brings octomap's).
+// and the occupied voxels of each keyframe. octomap's types are only declared here: include
+// <octomap/OcTree.h> to call these.
 #pragma once
-
-#include <octomap/OcTree.h>
 
 #include <cstdint>
 #include <vector>
+
+namespace octomap {
+class OcTree;
+class OcTreeKey;
+}  // namespace octomap
 
 namespace geofusion {
 
