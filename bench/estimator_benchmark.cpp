@@ -4,7 +4,8 @@
 // benchmark tool's.
 //
 //   estimator_benchmark [--models DIR] [--objects 18] [--keyframes 100] [--seed 101]
-//                       [--detector PRESET]
+//                       [--detector PRESET] [--method NAME] [--threads N]
+//                       [--render-triangles N] [--render-error M] (and the others of docs/tools.md)
 //
 // DIR holds the YCB-Video models (default ../shared/data/ycb_video beside the source tree);
 // without them the built-in primitives are used and the output says so.
