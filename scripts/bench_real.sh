@@ -3,7 +3,8 @@
 # ../shared/data/real (imported by import_dataset, detections 2-4 cm off along the ray) with the
 # benchmark's evaluation (bench.sh SUITE=real: results/real/report.md), then the visual odometry
 # beside Open3D's and OpenCV's RGB-D odometry on the 7-Scenes frames (results/real/vo_real.md).
-# Open3D and OpenCV-contrib come from PyPI into their own environment (~/.cache/geofusion/venv-real).
+# Open3D and OpenCV-contrib come from PyPI into their own environment (~/.cache/geofusion/venv-real,
+# pinned in bench/requirements-real.txt).
 set -euo pipefail
 source "$(dirname "$0")/env.sh"
 real="${GEOFUSION_REAL_DIR:-$GEOFUSION_SRC/../shared/data/real}"
@@ -11,12 +12,19 @@ out="${BENCH_OUT:-$GEOFUSION_SRC/results/real}"
 [ -d "$real/ycbv_video" ] && [ -d "$real/7scenes_redkitchen" ] ||
   { say "no real frames in $real (set GEOFUSION_REAL_DIR)"; exit 1; }
 SUITE=real BENCH_OUT="$out" bash "$GEOFUSION_SRC/scripts/bench.sh"
+# An environment of its own, not over Debian's site packages: opencv-contrib-python 5.1 needs
+# numpy >= 2, which Debian 12's scipy and matplotlib (numpy < 1.27) must not see. Every version
+# it installs is pinned (bench/requirements-real.txt); vo_real.py needs nothing else.
 venv="$HOME/.cache/geofusion/venv-real"
-if ! "$venv/bin/python" -c 'import open3d, cv2; cv2.Odometry' 2>/dev/null; then
-  say "installing open3d 0.20.0 and opencv-contrib-python 5.1.0.95 into $venv"
-  /usr/bin/python3 -m venv --system-site-packages "$venv"
-  "$venv/bin/pip" install --quiet --disable-pip-version-check 'open3d==0.20.0' \
-    'opencv-contrib-python==5.1.0.95'
+requirements="$GEOFUSION_SRC/bench/requirements-real.txt"
+if ! "$venv/bin/python" -c 'import open3d, cv2; cv2.Odometry' 2>/dev/null ||
+   ! cmp -s "$requirements" "$venv/requirements-real.txt"; then
+  say "installing $(grep -v '^#' "$requirements" | tr '\n' ' ')into $venv"
+  rm -rf "$venv"
+  /usr/bin/python3 -m venv "$venv"
+  "$venv/bin/pip" install --quiet --disable-pip-version-check -r "$requirements"
+  "$venv/bin/pip" check
+  cp "$requirements" "$venv/requirements-real.txt"
 fi
 set +u
 source "$GEOFUSION_WS/devel/setup.bash"

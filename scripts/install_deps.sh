@@ -23,7 +23,15 @@ PACKAGES=(
   pybind11-dev python3-dev python3-pytest python3-pil
   # tools, tests, screenshots
   python3-numpy python3-scipy python3-yaml python3-matplotlib python3-venv python3-pip xvfb imagemagick
+  # package.xml's rosdep keys resolved offline (scripts/check_rosdep.sh)
+  python3-rosdep2
 )
+
+# --print: the list, one name a line (scripts/test_platforms.sh installs the same list in its chroots).
+if [ "${1:-}" = "--print" ]; then
+  printf '%s\n' "${PACKAGES[@]}"
+  exit 0
+fi
 
 installed=$(dpkg-query -W -f='${Package} ${db:Status-Abbrev}\n' "${PACKAGES[@]}" 2>/dev/null \
   | awk '$2 ~ /^ii/ {print $1}' || true)

@@ -9,5 +9,9 @@ if "$GEOFUSION_VENV/bin/python" -c 'import pycocotools, matplotlib, numpy, yaml'
 fi
 say "making the benchmark's Python environment in $GEOFUSION_VENV (pycocotools from PyPI)"
 /usr/bin/python3 -m venv --system-site-packages "$GEOFUSION_VENV"
-"$GEOFUSION_VENV/bin/pip" install --quiet --disable-pip-version-check 'pycocotools==2.0.11'
+# Pinned, and held to the numpy it sees (Debian's): pip must not bring a numpy that Debian's
+# scipy and matplotlib were not built for (Debian 11: 1.19, 12: 1.24, 13: 2.2).
+numpy_version=$(/usr/bin/python3 -c 'import numpy; print(numpy.__version__)')
+"$GEOFUSION_VENV/bin/pip" install --quiet --disable-pip-version-check 'pycocotools==2.0.11' \
+  "numpy==$numpy_version"
 "$GEOFUSION_VENV/bin/python" -c 'import pycocotools, matplotlib, numpy, yaml'

@@ -7,9 +7,7 @@
 #include "geofusion/estimation/factors/pose_block.h"
 #include "geofusion/estimation/factors/relative_pose_factor.h"
 
-#include <ceres/ceres.h>
-#include <ceres/manifold.h>
-#include <ceres/product_manifold.h>
+#include "geofusion/common/ceres_compat.h"
 
 #include <array>
 #include <cmath>
@@ -19,9 +17,8 @@ namespace geofusion {
 namespace {
 
 // The pose blocks (factors/pose_block.h) live on the product of the unit-quaternion and
-// Euclidean manifolds.
-using PoseManifold =
-    ceres::ProductManifold<ceres::EigenQuaternionManifold, ceres::EuclideanManifold<3>>;
+// Euclidean manifolds (common/ceres_compat.h: Manifold or LocalParameterization by Ceres version).
+using ceres_compat::PoseManifold;
 
 ceres::LossFunction* makeLoss(const RobustLoss& loss) {
   if (loss.type == "huber") return new ceres::HuberLoss(loss.scale);
@@ -282,9 +279,7 @@ StageOneSummary optimizeStageOne(std::vector<Eigen::Isometry3d>* T_map_cam,
   for (std::size_t i = first_cam; i < n_kf; ++i) cams[i].set((*T_map_cam)[i]);
   for (std::size_t j = 0; j < n_obj; ++j) objs[j].set((*T_map_obj)[j]);
 
-  ceres::Problem::Options problem_options;
-  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
+  ceres::Problem problem(ceres_compat::optionsKeepingManifolds());
   PoseManifold manifold;
   auto add_pose = [&](PoseBlock& b) { problem.AddParameterBlock(b.data(), 7, &manifold); };
   for (std::size_t i = first_cam; i < n_kf; ++i) add_pose(cams[i]);
@@ -426,9 +421,7 @@ StageTwoSummary optimizeStageTwo(std::vector<Eigen::Isometry3d>* T_world_obj,
   identity.set(Eigen::Isometry3d::Identity());
   if (ground) ground_block.set(ground->T_world_obj);
 
-  ceres::Problem::Options problem_options;
-  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
+  ceres::Problem problem(ceres_compat::optionsKeepingManifolds());
   PoseManifold manifold;
   std::vector<char> in_problem(n, 0);
   auto block = [&](int index) -> PoseBlock* {

@@ -1,5 +1,7 @@
 #include "geofusion/odometry/visual_odometry.h"
 
+#include "geofusion/common/ceres_compat.h"
+
 #include <ceres/ceres.h>
 #include <mrpt/math/CQuaternion.h>
 #include <mrpt/poses/CPose3D.h>
@@ -529,7 +531,7 @@ VoFit VisualOdometry::Impl::solvePose(const VoFrame& f, const std::vector<int>& 
         new ceres::HuberLoss(c.ransac_reprojection_px / 2.0), q.coeffs().data(), t.data());
   }
   if (problem.NumResidualBlocks() > 0) {
-    problem.SetManifold(q.coeffs().data(), new ceres::EigenQuaternionManifold);
+    ceres_compat::setManifold(&problem, q.coeffs().data(), new ceres_compat::QuaternionManifold);
     ceres::Solver::Options options;
     options.linear_solver_type = ceres::DENSE_QR;
     options.max_num_iterations = 10;

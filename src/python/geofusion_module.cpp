@@ -49,7 +49,7 @@ GeoFusionConfig loadConfig(const py::object& source) {
     ok = loadConfigText(text, "the dict", &config, &report);
   } else {
     throw py::type_error("config: expected None, a YAML file's path or a dict, got " +
-                         std::string(py::str(py::type::of(source))));
+                         std::string(py::str(source.get_type())));
   }
   for (const std::string& w : report.warnings)
     PyErr_WarnEx(PyExc_UserWarning, ("geofusion config: " + w).c_str(), 1);

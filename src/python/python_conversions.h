@@ -19,6 +19,13 @@
 #include <string>
 #include <vector>
 
+// pybind11 2.4 (Ubuntu 20.04) names the module class `module`; 2.6 renamed it `module_`.
+#if PYBIND11_VERSION_MAJOR == 2 && PYBIND11_VERSION_MINOR < 6
+namespace pybind11 {
+using module_ = module;
+}  // namespace pybind11
+#endif
+
 namespace geofusion {
 namespace python {
 

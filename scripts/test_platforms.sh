@@ -1,0 +1,151 @@
+#!/usr/bin/env bash
+# make test-platforms: builds and tests the package as a ROS user would on other Debian releases,
+# one release at a time, each in a minimal chroot (docs/tests.md "Other platforms"):
+#   1. mmdebstrap makes the chroot from the Debian source this machine's apt already uses (read
+#      here at run time), with the package list of scripts/install_deps.sh (the same names exist
+#      on Debian 11 to 13) and the release's extras (Debian 11: gcc-9 and CMake 3.16.3 from PyPI,
+#      Ubuntu 20.04's toolchain). The chroot is kept and reused while its package list is the same.
+#   2. The tracked files of this tree are copied into a fresh catkin workspace's src/geofusion.
+#   3. catkin_make builds it (configure, source devel/setup.bash, configure again, all + tests),
+#      then ctest runs every test there, with ../shared's models and real frames bind-mounted.
+# Usage: scripts/test_platforms.sh RELEASE...   (bullseye | bookworm | trixie; default: bullseye trixie)
+# Needs root (mmdebstrap, mount, chroot). Environment: GEOFUSION_CHROOT_DIR (default
+# ~/.cache/geofusion/chroots), GEOFUSION_SHARED (default ../shared beside the source tree),
+# CTEST_ARGS (extra ctest arguments, e.g. "-R test_core").
+set -euo pipefail
+source "$(dirname "$0")/env.sh"
+
+[ "$(id -u)" -eq 0 ] || { echo "[geofusion] test-platforms needs root (chroot, mount)" >&2; exit 1; }
+command -v mmdebstrap >/dev/null || {
+  say "installing mmdebstrap"
+  apt-get update -q && DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends mmdebstrap
+}
+
+chroots="${GEOFUSION_CHROOT_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/geofusion/chroots}"
+shared="${GEOFUSION_SHARED:-$GEOFUSION_SRC/../shared}"
+
+# The Debian source apt uses here: the first URIs of a deb822 file, else the first deb line.
+debian_source() {
+  local uri
+  uri=$(cat /etc/apt/sources.list.d/*.sources 2>/dev/null | awk '/^URIs:/ {print $2}' \
+        | grep -v -- '-security' | head -n1 || true)
+  if [ -z "$uri" ]; then
+    uri=$(cat /etc/apt/sources.list /etc/apt/sources.list.d/*.list 2>/dev/null \
+          | awk '$1 == "deb" && $0 !~ /security/ {for (i = 2; i <= NF; i++) if ($i ~ /^[a-z]+:\/\//) {print $i; exit}}')
+  fi
+  [ -n "$uri" ] || { echo "[geofusion] no Debian source found in /etc/apt" >&2; exit 1; }
+  echo "$uri"
+}
+
+release_extras() {
+  case "$1" in
+    bullseye) echo "gcc-9 g++-9" ;;  # Ubuntu 20.04's compiler (CMake 3.16.3 comes from PyPI)
+    bookworm|trixie) echo "" ;;
+    *) echo "[geofusion] unknown release '$1' (bullseye, bookworm or trixie)" >&2; exit 1 ;;
+  esac
+}
+
+make_chroot() {
+  local release="$1" dir="$2" list stamp mirror start
+  list="$(bash "$GEOFUSION_SRC/scripts/install_deps.sh" --print | tr '\n' ' ') $(release_extras "$release")"
+  stamp="$(printf '%s' "$list" | md5sum | cut -c1-12)"
+  if [ -f "$dir/.geofusion-packages" ] && [ "$(cat "$dir/.geofusion-packages")" = "$stamp" ]; then
+    say "$release: reusing the chroot $dir"
+    return
+  fi
+  mirror=$(debian_source)
+  say "$release: making a minimal chroot in $dir from $mirror ($(wc -w <<<"$list") packages)"
+  rm -rf "$dir"
+  start=$(date +%s)
+  mmdebstrap --variant=apt --components=main --include="$(tr -s ' ' ',' <<<"$list" | sed 's/^,//; s/,$//')" \
+    "$release" "$dir" "deb $mirror $release main" "deb $mirror $release-updates main"
+  echo "$stamp" > "$dir/.geofusion-packages"
+  say "$release: chroot made in $(( $(date +%s) - start )) s"
+}
+
+mount_chroot() {
+  local dir="$1"
+  mount -t proc proc "$dir/proc"
+  mount --rbind /sys "$dir/sys" && mount --make-rslave "$dir/sys"
+  mount --rbind /dev "$dir/dev" && mount --make-rslave "$dir/dev"
+  mkdir -p "$dir/shared" "$dir/ccache"
+  if [ -d "$shared" ]; then mount --bind -o ro "$shared" "$dir/shared"; fi
+  mkdir -p "$chroots/ccache-$(basename "$dir")"
+  mount --bind "$chroots/ccache-$(basename "$dir")" "$dir/ccache"
+  cp /etc/resolv.conf "$dir/etc/resolv.conf" 2>/dev/null || true
+}
+
+unmount_chroot() {
+  local dir="$1" m
+  for m in ccache shared dev sys proc; do
+    umount -R -l "$dir/$m" 2>/dev/null || true
+  done
+}
+
+# What runs inside: the workspace's build and tests, as a ROS user runs them.
+inside_script() {
+  cat <<'INSIDE'
+set -euo pipefail
+export HOME=/root LANG=C.UTF-8 CCACHE_DIR=/ccache ROS_HOSTNAME=localhost
+export GEOFUSION_WS=/ws GEOFUSION_YCB_DIR=/shared/data/ycb_video GEOFUSION_REAL_DIR=/shared/data/real
+export GEOFUSION_ROSDISTRO_DIR=/shared/platforms/rosdistro
+if [ "$RELEASE" = bullseye ]; then
+  # Ubuntu 20.04's toolchain: GCC 9 and CMake 3.16.3.
+  if [ ! -x /opt/cmake-3.16/bin/cmake ]; then
+    python3 -m venv /opt/cmake-3.16 && /opt/cmake-3.16/bin/pip install --quiet 'cmake==3.16.3.post1'
+  fi
+  export PATH=/opt/cmake-3.16/bin:$PATH CC=gcc-9 CXX=g++-9
+fi
+echo "[geofusion] $RELEASE: $(cmake --version | head -n1), $(${CXX:-c++} --version | head -n1), $(python3 --version), numpy $(python3 -c 'import numpy; print(numpy.__version__)')"
+cd /ws
+args=(-j2 -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 -DCMAKE_BUILD_TYPE=Release)
+start=$(date +%s)
+set +u
+catkin_make "${args[@]}"
+source devel/setup.bash
+catkin_make --force-cmake "${args[@]}"
+catkin_make "${args[@]}" all tests
+set -u
+echo "[geofusion] $RELEASE: build took $(( $(date +%s) - start )) s"
+bash /ws/src/geofusion/scripts/python_env.sh
+start=$(date +%s)
+cd /ws/build
+status=0
+set +u
+source /ws/devel/setup.bash
+set -u
+ctest --output-on-failure $CTEST_ARGS || status=$?
+echo "[geofusion] $RELEASE: tests took $(( $(date +%s) - start )) s, ctest exit $status"
+exit $status
+INSIDE
+}
+
+test_release() {
+  local release="$1" dir="$chroots/$1" status=0
+  release_extras "$release" >/dev/null
+  make_chroot "$release" "$dir"
+  rm -rf "$dir/ws" && mkdir -p "$dir/ws/src/geofusion"
+  (cd "$GEOFUSION_SRC" && git ls-files -co --exclude-standard -z | tar --null -T - -cf -) \
+    | tar -xf - -C "$dir/ws/src/geofusion"
+  say "$release: $(cd "$GEOFUSION_SRC" && git describe --always --dirty) copied into $dir/ws/src/geofusion"
+  trap 'unmount_chroot "'"$dir"'"' EXIT
+  mount_chroot "$dir"
+  inside_script | chroot "$dir" /usr/bin/env -i PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
+    RELEASE="$release" CTEST_ARGS="${CTEST_ARGS:-}" bash -s || status=$?
+  unmount_chroot "$dir"
+  trap - EXIT
+  say "$release: $([ $status -eq 0 ] && echo PASSED || echo "FAILED (exit $status)")"
+  return $status
+}
+
+releases=("$@")
+[ ${#releases[@]} -gt 0 ] || releases=(bullseye trixie)
+failed=()
+for r in "${releases[@]}"; do
+  test_release "$r" || failed+=("$r")
+done
+if [ ${#failed[@]} -gt 0 ]; then
+  say "test-platforms: FAILED on ${failed[*]}"
+  exit 1
+fi
+say "test-platforms: passed on ${releases[*]}"
