@@ -73,6 +73,12 @@ mount_chroot() {
   mkdir -p "$chroots/ccache-$(basename "$dir")"
   mount --bind "$chroots/ccache-$(basename "$dir")" "$dir/ccache"
   cp /etc/resolv.conf "$dir/etc/resolv.conf" 2>/dev/null || true
+  # This machine's trust (a proxy's certificate authority among them) for pip inside.
+  if [ -f /etc/ssl/certs/ca-certificates.crt ]; then
+    mkdir -p "$dir/etc/ssl/certs"
+    cp /etc/ssl/certs/ca-certificates.crt "$dir/etc/ssl/certs/ca-certificates.crt"
+  fi
+  if [ -f /etc/pip.conf ]; then cp /etc/pip.conf "$dir/etc/pip.conf"; fi
 }
 
 unmount_chroot() {
@@ -91,9 +97,12 @@ export GEOFUSION_WS=/ws GEOFUSION_YCB_DIR=/shared/data/ycb_video GEOFUSION_REAL_
 export GEOFUSION_ROSDISTRO_DIR=/shared/platforms/rosdistro
 if [ "$RELEASE" = bullseye ]; then
   # Ubuntu 20.04's toolchain: GCC 9 and CMake 3.16.3.
-  if [ ! -x /opt/cmake-3.16/bin/cmake ]; then
-    python3 -m venv /opt/cmake-3.16 && /opt/cmake-3.16/bin/pip install --quiet 'cmake==3.16.3.post1'
+  # (its venv's python3 stays off PATH: only cmake, ctest and cpack are linked).
+  if [ ! -x /opt/cmake-3.16/venv/bin/cmake ]; then
+    python3 -m venv /opt/cmake-3.16/venv && /opt/cmake-3.16/venv/bin/pip install --quiet 'cmake==3.16.3.post1'
   fi
+  mkdir -p /opt/cmake-3.16/bin
+  for tool in cmake ctest cpack; do ln -sfn /opt/cmake-3.16/venv/bin/$tool /opt/cmake-3.16/bin/$tool; done
   export PATH=/opt/cmake-3.16/bin:$PATH CC=gcc-9 CXX=g++-9
 fi
 echo "[geofusion] $RELEASE: $(cmake --version | head -n1), $(${CXX:-c++} --version | head -n1), $(python3 --version), numpy $(python3 -c 'import numpy; print(numpy.__version__)')"
@@ -130,8 +139,14 @@ test_release() {
   say "$release: $(cd "$GEOFUSION_SRC" && git describe --always --dirty) copied into $dir/ws/src/geofusion"
   trap 'unmount_chroot "'"$dir"'"' EXIT
   mount_chroot "$dir"
+  local pass=() v
+  for v in http_proxy https_proxy no_proxy HTTP_PROXY HTTPS_PROXY NO_PROXY PIP_INDEX_URL; do
+    [ -n "${!v:-}" ] && pass+=("$v=${!v}")
+  done
+  [ -f /etc/ssl/certs/ca-certificates.crt ] && pass+=(SSL_CERT_FILE=/etc/ssl/certs/ca-certificates.crt
+    PIP_CERT=/etc/ssl/certs/ca-certificates.crt REQUESTS_CA_BUNDLE=/etc/ssl/certs/ca-certificates.crt)
   inside_script | chroot "$dir" /usr/bin/env -i PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
-    RELEASE="$release" CTEST_ARGS="${CTEST_ARGS:-}" bash -s || status=$?
+    RELEASE="$release" CTEST_ARGS="${CTEST_ARGS:-}" "${pass[@]}" bash -s || status=$?
   unmount_chroot "$dir"
   trap - EXIT
   say "$release: $([ $status -eq 0 ] && echo PASSED || echo "FAILED (exit $status)")"

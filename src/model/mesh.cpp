@@ -13,10 +13,10 @@
 
 #include <algorithm>
 #include <array>
-#include <limits>
-#include <map>
 #include <cmath>
 #include <fstream>
+#include <limits>
+#include <map>
 #include <random>
 #include <sstream>
 
@@ -199,10 +199,9 @@ std::size_t collapseEdges(unsigned int* destination, const unsigned int* welded,
     hi = hi.cwiseMax(vertices[i]);
   }
   const float scale = vertex_count > 0 ? (hi - lo).maxCoeff() : 0.f;  // as meshopt_simplifyScale
-  const std::size_t kept =
-      meshopt_simplify(destination, welded, index_count, positions, vertex_count,
-                       sizeof(Eigen::Vector3f), target_index_count,
-                       static_cast<float>(max_error_m / std::max(scale, 1e-9f)));
+  const std::size_t kept = meshopt_simplify(
+      destination, welded, index_count, positions, vertex_count, sizeof(Eigen::Vector3f),
+      target_index_count, static_cast<float>(max_error_m / std::max(scale, 1e-9f)));
   if (achieved_error_m) *achieved_error_m = max_error_m;
 #endif
   return kept;
@@ -235,8 +234,8 @@ TriangleMesh simplifyMesh(const TriangleMesh& mesh, std::size_t target_triangles
   std::vector<unsigned int> simplified(index_count);
   std::size_t kept = index_count;
   if (mesh.triangles.size() > target_triangles) {
-    kept = collapseEdges(simplified.data(), welded.data(), index_count, out.vertices.data(),
-                         unique, target_triangles * 3, max_error_m, achieved_error_m);
+    kept = collapseEdges(simplified.data(), welded.data(), index_count, out.vertices.data(), unique,
+                         target_triangles * 3, max_error_m, achieved_error_m);
   } else {
     simplified = welded;
   }
