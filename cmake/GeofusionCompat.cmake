@@ -6,7 +6,20 @@
 #   meshoptimizer                          none on Ubuntu 20.04; 0.15 on Debian 11 (no
 #                                          meshopt_simplifyScale, no error output)
 #   pybind11 2.4 (Ubuntu 20.04)            no pybind11_extension()
+#   qhull                                  Qhull::qhull_r from its CMake config where there is one,
+#                                          else the library and header found by name
 include(CheckCXXSourceCompiles)
+
+if(NOT TARGET Qhull::qhull_r)
+  find_path(GEOFUSION_QHULL_INCLUDE_DIR libqhull_r/qhull_ra.h)
+  find_library(GEOFUSION_QHULL_R_LIBRARY NAMES qhull_r)
+  if(NOT GEOFUSION_QHULL_INCLUDE_DIR OR NOT GEOFUSION_QHULL_R_LIBRARY)
+    message(FATAL_ERROR "geofusion: qhull's reentrant library (libqhull_r, package libqhull-dev) not found")
+  endif()
+  add_library(Qhull::qhull_r INTERFACE IMPORTED)
+  set_target_properties(Qhull::qhull_r PROPERTIES INTERFACE_LINK_LIBRARIES "${GEOFUSION_QHULL_R_LIBRARY}"
+    INTERFACE_INCLUDE_DIRECTORIES "${GEOFUSION_QHULL_INCLUDE_DIR}")
+endif()
 
 # Ceres: one target name for every version.
 if(NOT TARGET Ceres::ceres)

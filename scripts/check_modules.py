@@ -45,7 +45,7 @@ ROS_INCLUDE = re.compile(
     r'octomap_msgs|vision_msgs)/')
 GENERATED_MESSAGE = re.compile(r'^\s*#\s*include\s*[<"]geofusion/[A-Z][A-Za-z]*\.h[>"]')
 HEAVY_INCLUDE = re.compile(
-    r'^\s*#\s*include\s*<(pcl/|fcl/|ceres/|opencv2/|btBullet|octomap/|GL/|assimp/|mrpt/)')
+    r'^\s*#\s*include\s*<(pcl/|fcl/|ceres/|opencv2/|btBullet|octomap/|GL/|assimp/|mrpt/|libqhull)')
 # Public headers meant for a few .cpp files only, which may bring a heavy library.
 HEAVY_ALLOWED = {"include/geofusion/model/fcl_hull.h", "include/geofusion/common/ceres_compat.h"}
 

@@ -18,7 +18,7 @@ PACKAGES=(
   python3-diagnostic-msgs rviz librviz-dev
   # the core's libraries
   libeigen3-dev libceres-dev libpcl-conversions-dev libopencv-dev libmrpt-poses-dev libfcl-dev
-  liboctomap-dev libosmesa6-dev libmeshoptimizer-dev nlohmann-json3-dev libbullet-dev libassimp-dev libyaml-cpp-dev libgtest-dev
+  liboctomap-dev libqhull-dev libosmesa6-dev libmeshoptimizer-dev nlohmann-json3-dev libbullet-dev libassimp-dev libyaml-cpp-dev libgtest-dev
   # the Python module (docs/python.md)
   pybind11-dev python3-dev python3-pytest python3-pil
   # tools, tests, screenshots

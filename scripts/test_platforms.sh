@@ -4,7 +4,8 @@
 #   1. mmdebstrap makes the chroot from the Debian source this machine's apt already uses (read
 #      here at run time), with the package list of scripts/install_deps.sh (the same names exist
 #      on Debian 11 to 13) and the release's extras (Debian 11: gcc-9 and CMake 3.16.3 from PyPI,
-#      Ubuntu 20.04's toolchain). The chroot is kept and reused while its package list is the same.
+#      Ubuntu 20.04's toolchain). The chroot is kept and reused; packages the list gained since
+#      are installed into it.
 #   2. The tracked files of this tree are copied into a fresh catkin workspace's src/geofusion.
 #   3. catkin_make builds it (configure, source devel/setup.bash, configure again, all + tests),
 #      then ctest runs every test there, with ../shared's models and real frames bind-mounted.
@@ -46,11 +47,18 @@ release_extras() {
 }
 
 make_chroot() {
-  local release="$1" dir="$2" list stamp mirror start
+  local release="$1" dir="$2" list mirror start
   list="$(bash "$GEOFUSION_SRC/scripts/install_deps.sh" --print | tr '\n' ' ') $(release_extras "$release")"
-  stamp="$(printf '%s' "$list" | md5sum | cut -c1-12)"
-  if [ -f "$dir/.geofusion-packages" ] && [ "$(cat "$dir/.geofusion-packages")" = "$stamp" ]; then
+  if [ -f "$dir/.geofusion-release" ]; then
+    # Kept from an earlier run: only what the list gained since is installed.
     say "$release: reusing the chroot $dir"
+    chroot "$dir" /usr/bin/env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin DEBIAN_FRONTEND=noninteractive \
+      bash -c "dpkg-query -W -f='\${Package} \${db:Status-Abbrev}\n' $list 2>/dev/null | awk '\$2 ~ /^ii/ {print \$1}' | sort > /tmp/have
+               missing=\$(for p in $list; do grep -qx \"\$p\" /tmp/have || echo \$p; done)
+               if [ -n \"\$missing\" ]; then
+                 echo \"[geofusion] $release: installing\" \$missing
+                 apt-get update -q && apt-get install -y -q --no-install-recommends \$missing
+               fi"
     return
   fi
   mirror=$(debian_source)
@@ -59,7 +67,7 @@ make_chroot() {
   start=$(date +%s)
   mmdebstrap --variant=apt --components=main --include="$(tr -s ' ' ',' <<<"$list" | sed 's/^,//; s/,$//')" \
     "$release" "$dir" "deb $mirror $release main" "deb $mirror $release-updates main"
-  echo "$stamp" > "$dir/.geofusion-packages"
+  echo "$release" > "$dir/.geofusion-release"
   say "$release: chroot made in $(( $(date +%s) - start )) s"
 }
 
@@ -137,6 +145,14 @@ test_release() {
   (cd "$GEOFUSION_SRC" && git ls-files -co --exclude-standard -z | tar --null -T - -cf -) \
     | tar -xf - -C "$dir/ws/src/geofusion"
   say "$release: $(cd "$GEOFUSION_SRC" && git describe --always --dirty) copied into $dir/ws/src/geofusion"
+  # The demo recording this machine made (if any), so that every release maps the same frames
+  # and bench_demo's reports compare (Bullet and the compilers settle generated scenes a little
+  # differently on each release).
+  rm -rf "$dir/root/.cache/geofusion/data/demo"
+  if [ -d "$GEOFUSION_DATA/demo" ]; then
+    mkdir -p "$dir/root/.cache/geofusion/data" && cp -a "$GEOFUSION_DATA/demo" "$dir/root/.cache/geofusion/data/"
+    say "$release: the demo recording of $GEOFUSION_DATA/demo copied in"
+  fi
   trap 'unmount_chroot "'"$dir"'"' EXIT
   mount_chroot "$dir"
   local pass=() v
@@ -149,6 +165,10 @@ test_release() {
     RELEASE="$release" CTEST_ARGS="${CTEST_ARGS:-}" "${pass[@]}" bash -s || status=$?
   unmount_chroot "$dir"
   trap - EXIT
+  if [ -f "$dir/ws/build/geofusion/bench_demo/report.md" ]; then
+    cp "$dir/ws/build/geofusion/bench_demo/report.md" "$chroots/$release-bench_demo.md"
+    say "$release: bench_demo's report kept in $chroots/$release-bench_demo.md"
+  fi
   say "$release: $([ $status -eq 0 ] && echo PASSED || echo "FAILED (exit $status)")"
   return $status
 }

@@ -1,9 +1,10 @@
 #include "geofusion/model/mesh.h"
 
+extern "C" {
+#include <libqhull_r/qhull_ra.h>
+}
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
-#include <pcl/point_types.h>
-#include <pcl/surface/convex_hull.h>
 #include <Eigen/Geometry>
 #include <assimp/Importer.hpp>
 
@@ -279,34 +280,69 @@ TriangleMesh simplifyMesh(const TriangleMesh& mesh, std::size_t /*target_triangl
 }
 #endif
 
+namespace {
+
+// qhull's reentrant library called as PCL 1.13's ConvexHull calls it ("qhull " then
+// qh_triangulate; vertices in qhull's order, each facet's in its own), so the hulls are those
+// PCL gives on Debian 12. PCL itself is not used for this: Debian 11's PCL 1.11 crashes in
+// ConvexHull (built against another qhull than it runs with; PCL pull request 4510).
+bool qhullTriangles(const std::vector<Eigen::Vector3f>& points,
+                    std::vector<Eigen::Vector3f>* vertices,
+                    std::vector<std::array<int, 3>>* facets) {
+  const int dimension = 3;
+  auto* coords = static_cast<coordT*>(calloc(points.size() * dimension, sizeof(coordT)));
+  if (!coords) return false;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    for (int d = 0; d < dimension; ++d) coords[i * dimension + d] = points[i][d];
+  qhT qh_qh;
+  qhT* qh = &qh_qh;
+  qh_zero(qh, stderr);
+  char flags[] = "qhull ";
+  // ismalloc True: qhull frees the coordinates.
+  const int exitcode = qh_new_qhull(qh, dimension, static_cast<int>(points.size()), coords, True,
+                                    flags, nullptr, stderr);
+  if (exitcode == 0) {
+    qh_triangulate(qh);
+    std::map<unsigned int, int> index_of;  // qhull's vertex id -> our index
+    vertexT* vertex;
+    FORALLvertices {
+      index_of[vertex->id] = static_cast<int>(vertices->size());
+      vertices->push_back(points[static_cast<std::size_t>(qh_pointid(qh, vertex->point))]);
+    }
+    facetT* facet;
+    FORALLfacets {
+      std::array<int, 3> f{{-1, -1, -1}};
+      int vertex_n, vertex_i;
+      FOREACHvertex_i_(qh, facet->vertices) if (vertex_i < 3) f[vertex_i] = index_of[vertex->id];
+      facets->push_back(f);
+    }
+  }
+  qh_freeqhull(qh, !qh_ALL);
+  int curlong, totlong;
+  qh_memfreeshort(qh, &curlong, &totlong);
+  return exitcode == 0;
+}
+
+}  // namespace
+
 TriangleMesh convexHull(const std::vector<Eigen::Vector3f>& points) {
   TriangleMesh out;
   if (points.size() < 4) return out;
-  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
-  cloud->reserve(points.size());
-  for (const auto& p : points) cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
-  pcl::ConvexHull<pcl::PointXYZ> hull;
-  hull.setInputCloud(cloud);
-  hull.setDimension(3);
-  pcl::PointCloud<pcl::PointXYZ> hull_cloud;
-  std::vector<pcl::Vertices> polygons;
-  hull.reconstruct(hull_cloud, polygons);
-  if (hull_cloud.size() < 4 || polygons.empty()) return out;
-  for (const auto& p : hull_cloud) out.vertices.emplace_back(p.x, p.y, p.z);
+  std::vector<std::array<int, 3>> facets;
+  if (!qhullTriangles(points, &out.vertices, &facets) || out.vertices.size() < 4 ||
+      facets.empty())
+    return TriangleMesh();
   Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
   for (const auto& v : out.vertices) centroid += v;
   centroid /= static_cast<float>(out.vertices.size());
-  for (const auto& poly : polygons) {
-    // Fan-triangulate (qhull's output is triangulated already; this is for safety), outward.
-    for (std::size_t k = 1; k + 1 < poly.vertices.size(); ++k) {
-      Eigen::Vector3i t(static_cast<int>(poly.vertices[0]), static_cast<int>(poly.vertices[k]),
-                        static_cast<int>(poly.vertices[k + 1]));
-      const Eigen::Vector3f a = out.vertices[t[0]], b = out.vertices[t[1]], c = out.vertices[t[2]];
-      const Eigen::Vector3f n = (b - a).cross(c - a);
-      if (n.squaredNorm() < 1e-24f) continue;
-      if (n.dot((a + b + c) / 3.f - centroid) < 0.f) std::swap(t[1], t[2]);
-      out.triangles.push_back(t);
-    }
+  for (const auto& f : facets) {
+    if (f[0] < 0 || f[1] < 0 || f[2] < 0) continue;
+    Eigen::Vector3i t(f[0], f[1], f[2]);
+    const Eigen::Vector3f a = out.vertices[t[0]], b = out.vertices[t[1]], c = out.vertices[t[2]];
+    const Eigen::Vector3f n = (b - a).cross(c - a);
+    if (n.squaredNorm() < 1e-24f) continue;
+    if (n.dot((a + b + c) / 3.f - centroid) < 0.f) std::swap(t[1], t[2]);  // outward
+    out.triangles.push_back(t);
   }
   return out;
 }
