@@ -314,12 +314,6 @@ class Table {
     real("association.merge_cross_class_fraction", 0, 1,
          "objects of two classes merge only past this share of the thinner one's extent",
          [f](GeoFusionConfig& c) { return &f(c)->merge_cross_class_fraction; });
-    real("association.merge_supported_inlier_ratio", 0, 1.01,
-         "two classes both seen at one keyframe with r_in at least this never merge (>1: off)",
-         [f](GeoFusionConfig& c) { return &f(c)->merge_supported_inlier_ratio; });
-    real("association.merge_supported_max_occlusion", 0, 1,
-         "... and r_occ at most this (a phantom inside a real object is mostly hidden)",
-         [f](GeoFusionConfig& c) { return &f(c)->merge_supported_max_occlusion; });
     flag("association.joint_assignment",
          "one Hungarian assignment per keyframe (false: the paper's greedy order)",
          [f](GeoFusionConfig& c) { return &f(c)->joint_assignment; });

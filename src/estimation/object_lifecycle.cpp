@@ -109,25 +109,9 @@ void removeSeenAbsent(std::vector<ObjectTrack>* tracks, const std::vector<int>& 
 // Objects of two classes (a real object differs from its mesh by millimetres, so real neighbours
 // overlap a little) must interpenetrate by merge_cross_class_fraction of that extent: a
 // look-alike reported in place of the object.
-// Two tracks measured at one keyframe, each mostly in view and where the depth agrees with it:
-// two objects the camera saw side by side, not one reported twice (issue 45).
-bool bothSupported(const ObjectTrack& a, const ObjectTrack& b, const AssociationConfig& config) {
-  auto supported = [&](const TrackObservation& o) {
-    return o.inlier_ratio >= config.merge_supported_inlier_ratio && o.occluded_ratio >= 0.0 &&
-           o.occluded_ratio <= config.merge_supported_max_occlusion;
-  };
-  for (const TrackObservation& x : a.observations) {
-    if (!supported(x)) continue;
-    for (const TrackObservation& y : b.observations)
-      if (y.keyframe == x.keyframe && supported(y)) return true;
-  }
-  return false;
-}
-
 bool mappedTwice(const ObjectTrack& a, const Eigen::Isometry3d& T_a, const ObjectTrack& b,
                  const Eigen::Isometry3d& T_b, const AssociationConfig& config,
                  HullCollider* collider) {
-  if (a.model->name != b.model->name && bothSupported(a, b, config)) return false;
   Eigen::Isometry3d Ta = T_a, Tb = T_b;
   Ta.translation() += Ta.linear() * a.box_centre;
   Tb.translation() += Tb.linear() * b.box_centre;
@@ -136,7 +120,9 @@ bool mappedTwice(const ObjectTrack& a, const Eigen::Isometry3d& T_a, const Objec
   double needed = std::min(config.merge_min_penetration_m, config.merge_thin_fraction * thinnest);
   if (a.model->name != b.model->name)
     needed = std::max(needed, config.merge_cross_class_fraction * thinnest);
-  return collider->penetration(a.model, T_a, b.model, T_b) >= needed;
+  // Measured on the shapes (their convex parts), not on one hull: a hull spans the air inside a
+  // banana's curve or a mug's handle, where a neighbour can lie (issue 45).
+  return collider->partsPenetration(a.model, T_a, b.model, T_b) >= needed;
 }
 
 void absorb(const ObjectTrack& dropped, ObjectTrack* kept) {

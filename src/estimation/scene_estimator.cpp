@@ -494,10 +494,7 @@ std::vector<int> SceneEstimator::associateDetections(const Keyframe& kf,
   for (std::size_t r = 0; r < detections.usable.size(); ++r) {
     const std::size_t k = static_cast<std::size_t>(detections.usable[r]);
     const Eigen::Isometry3d& T_cam_obj = detections.pose(k);
-    Observation obs{t, T_cam_obj, detections.score[k], detections.refinement[k].accepted()};
-    const ConsistencyResult& seen = detections.refinement[k].after;
-    obs.inlier_ratio = seen.determined ? seen.r_in : -1.0;
-    obs.occluded_ratio = seen.determined ? seen.r_occ : -1.0;
+    const Observation obs{t, T_cam_obj, detections.score[k], detections.refinement[k].accepted()};
     if (assignment[r] < 0) started->push_back(next_id_);
     Track& tr = assignment[r] < 0 ? startTrack(detections.models[k], T_map_cam * T_cam_obj, t)
                                   : tracks_[static_cast<std::size_t>(assignment[r])];

@@ -15,8 +15,9 @@ TriangleMesh collisionHullOf(const ObjectModel& model) {
   return model.collision_hull.empty() ? collisionHull(model.mesh) : model.collision_hull;
 }
 
-std::shared_ptr<fcl::CollisionGeometryd> fclHull(const ObjectModel& model) {
-  const TriangleMesh hull = collisionHullOf(model);
+namespace {
+
+std::shared_ptr<fcl::CollisionGeometryd> fclConvex(const TriangleMesh& hull) {
   auto vertices = std::make_shared<std::vector<fcl::Vector3d>>();
   for (const auto& v : hull.vertices) vertices->push_back(v.cast<double>());
   auto faces = std::make_shared<std::vector<int>>();
@@ -25,6 +26,12 @@ std::shared_ptr<fcl::CollisionGeometryd> fclHull(const ObjectModel& model) {
     faces->insert(faces->end(), {t[0], t[1], t[2]});
   }
   return std::make_shared<fcl::Convexd>(vertices, static_cast<int>(hull.triangles.size()), faces);
+}
+
+}  // namespace
+
+std::shared_ptr<fcl::CollisionGeometryd> fclHull(const ObjectModel& model) {
+  return fclConvex(collisionHullOf(model));
 }
 
 double fclPenetration(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b) {
@@ -48,7 +55,13 @@ double fclDistance(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b) {
 }
 
 struct HullCollider::Impl {
+  struct Part {
+    std::shared_ptr<fcl::CollisionGeometryd> shape;
+    Eigen::Vector3d centre;  ///< of the part's bounding sphere, model frame
+    double radius = 0.0;
+  };
   std::map<std::shared_ptr<const ObjectModel>, std::shared_ptr<fcl::CollisionGeometryd>> hulls;
+  std::map<std::shared_ptr<const ObjectModel>, std::vector<Part>> parts;
   std::shared_ptr<fcl::CollisionGeometryd> hull(const std::shared_ptr<const ObjectModel>& m) {
     auto it = hulls.find(m);
     if (it != hulls.end()) return it->second;
@@ -56,13 +69,43 @@ struct HullCollider::Impl {
     hulls[m] = g;
     return g;
   }
+  // The model's convex parts; a model with one part (or none made) has its hull, the same FCL
+  // shape penetration() uses.
+  const std::vector<Part>& partsOf(const std::shared_ptr<const ObjectModel>& m) {
+    auto it = parts.find(m);
+    if (it != parts.end()) return it->second;
+    std::vector<Part>& out = parts[m];
+    auto sphere = [](const TriangleMesh& mesh, Part* p) {
+      Eigen::Vector3f lo, hi;
+      mesh.bounds(&lo, &hi);
+      p->centre = (0.5f * (lo + hi)).cast<double>();
+      for (const auto& v : mesh.vertices)
+        p->radius = std::max(p->radius, (v.cast<double>() - p->centre).norm());
+    };
+    if (m->collision_parts.size() <= 1) {
+      Part p;
+      p.shape = hull(m);
+      sphere(collisionHullOf(*m), &p);
+      out.push_back(p);
+      return out;
+    }
+    for (const TriangleMesh& mesh : m->collision_parts) {
+      Part p;
+      p.shape = fclConvex(mesh);
+      sphere(mesh, &p);
+      out.push_back(p);
+    }
+    return out;
+  }
 };
 
 HullCollider::HullCollider() : impl_(std::make_unique<Impl>()) {}
 HullCollider::~HullCollider() = default;
 
 void HullCollider::prepare(const std::shared_ptr<const ObjectModel>& model) {
-  if (model) impl_->hull(model);
+  if (!model) return;
+  impl_->hull(model);
+  impl_->partsOf(model);
 }
 
 namespace {
@@ -85,6 +128,24 @@ double HullCollider::penetration(const std::shared_ptr<const ObjectModel>& a,
                                  const std::shared_ptr<const ObjectModel>& b,
                                  const Eigen::Isometry3d& T_world_b) {
   return onHulls(impl_.get(), a, T_world_a, b, T_world_b, fclPenetration);
+}
+
+double HullCollider::partsPenetration(const std::shared_ptr<const ObjectModel>& a,
+                                      const Eigen::Isometry3d& T_world_a,
+                                      const std::shared_ptr<const ObjectModel>& b,
+                                      const Eigen::Isometry3d& T_world_b) {
+  if (!a || !b) return 0.0;
+  const fcl::Transform3d Ta(T_world_a.matrix()), Tb(T_world_b.matrix());
+  double deepest = 0.0;
+  for (const Impl::Part& pa : impl_->partsOf(a)) {
+    const Eigen::Vector3d ca = T_world_a * pa.centre;
+    for (const Impl::Part& pb : impl_->partsOf(b)) {
+      if ((ca - T_world_b * pb.centre).norm() > pa.radius + pb.radius) continue;  // apart
+      fcl::CollisionObjectd oa(pa.shape, Ta), ob(pb.shape, Tb);
+      deepest = std::max(deepest, fclPenetration(&oa, &ob));
+    }
+  }
+  return deepest;
 }
 
 double HullCollider::distance(const std::shared_ptr<const ObjectModel>& a,

@@ -280,6 +280,17 @@ TriangleMesh simplifyMesh(const TriangleMesh& mesh, std::size_t /*target_triangl
 }
 #endif
 
+double enclosedVolume(const TriangleMesh& mesh) {
+  double six_v = 0.0;
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3d a = mesh.vertices[t[0]].cast<double>(),
+                          b = mesh.vertices[t[1]].cast<double>(),
+                          c = mesh.vertices[t[2]].cast<double>();
+    six_v += a.dot(b.cross(c));
+  }
+  return six_v / 6.0;
+}
+
 namespace {
 
 // qhull's reentrant library called as PCL 1.13's ConvexHull calls it ("qhull " then
@@ -329,8 +340,7 @@ TriangleMesh convexHull(const std::vector<Eigen::Vector3f>& points) {
   TriangleMesh out;
   if (points.size() < 4) return out;
   std::vector<std::array<int, 3>> facets;
-  if (!qhullTriangles(points, &out.vertices, &facets) || out.vertices.size() < 4 ||
-      facets.empty())
+  if (!qhullTriangles(points, &out.vertices, &facets) || out.vertices.size() < 4 || facets.empty())
     return TriangleMesh();
   Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
   for (const auto& v : out.vertices) centroid += v;

@@ -4,7 +4,11 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
 #include <cstdlib>
+#include <limits>
 
 #include <cmath>
 
@@ -89,6 +93,72 @@ TriangleMesh collisionHull(const TriangleMesh& mesh) {
   return convexHull(simplifyMesh(mesh, 400, 0.002).vertices);
 }
 
+namespace {
+
+// One cut of collisionParts: `points` split across their longest principal axis at its middle,
+// each side with the points within `overlap` of the cut.
+void splitAcrossLongestAxis(const std::vector<Eigen::Vector3f>& points, float overlap,
+                            std::vector<Eigen::Vector3f>* lower,
+                            std::vector<Eigen::Vector3f>* upper) {
+  Eigen::Vector3f mean = Eigen::Vector3f::Zero();
+  for (const auto& p : points) mean += p;
+  mean /= static_cast<float>(points.size());
+  Eigen::Matrix3f cov = Eigen::Matrix3f::Zero();
+  for (const auto& p : points) cov += (p - mean) * (p - mean).transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3f> eig(cov);
+  const Eigen::Vector3f axis = eig.eigenvectors().col(2);  // largest eigenvalue last
+  float lo = std::numeric_limits<float>::max(), hi = -lo;
+  for (const auto& p : points) {
+    lo = std::min(lo, axis.dot(p));
+    hi = std::max(hi, axis.dot(p));
+  }
+  const float middle = 0.5f * (lo + hi);
+  for (const auto& p : points) {
+    const float s = axis.dot(p);
+    if (s <= middle + overlap) lower->push_back(p);
+    if (s >= middle - overlap) upper->push_back(p);
+  }
+}
+
+// collisionParts' recursion: `hull` (of `points`) kept, or replaced by its halves' parts.
+void addParts(const std::vector<Eigen::Vector3f>& points, TriangleMesh hull, int depth_left,
+              double fill, std::vector<TriangleMesh>* parts) {
+  const double volume = enclosedVolume(hull);
+  if (depth_left > 0 && points.size() >= 40 && volume > 0.0) {
+    std::vector<Eigen::Vector3f> lower, upper;
+    splitAcrossLongestAxis(points, 0.001f, &lower, &upper);
+    TriangleMesh lower_hull = convexHull(lower), upper_hull = convexHull(upper);
+    if (!lower_hull.empty() && !upper_hull.empty() &&
+        enclosedVolume(lower_hull) + enclosedVolume(upper_hull) < fill * volume) {
+      addParts(lower, std::move(lower_hull), depth_left - 1, fill, parts);
+      addParts(upper, std::move(upper_hull), depth_left - 1, fill, parts);
+      return;
+    }
+  }
+  parts->push_back(std::move(hull));
+}
+
+}  // namespace
+
+std::vector<TriangleMesh> collisionParts(const TriangleMesh& mesh, const TriangleMesh& hull,
+                                         int max_depth, double fill) {
+  if (hull.empty() || mesh.empty()) return {hull};
+  const TriangleMesh light = simplifyMesh(mesh, 400, 0.002);
+  std::vector<Eigen::Vector3f> points = light.vertices;
+  const std::vector<Eigen::Vector3f> samples = sampleSurfacePoints(light, 3000, 11);
+  points.insert(points.end(), samples.begin(), samples.end());
+  std::vector<TriangleMesh> parts;
+  std::vector<Eigen::Vector3f> lower, upper;
+  splitAcrossLongestAxis(points, 0.001f, &lower, &upper);
+  const TriangleMesh lower_hull = convexHull(lower), upper_hull = convexHull(upper);
+  if (max_depth < 1 || lower_hull.empty() || upper_hull.empty() ||
+      enclosedVolume(lower_hull) + enclosedVolume(upper_hull) >= fill * enclosedVolume(hull))
+    return {hull};  // the hull fits: the shape the other checks use
+  addParts(lower, lower_hull, max_depth - 1, fill, &parts);
+  addParts(upper, upper_hull, max_depth - 1, fill, &parts);
+  return parts;
+}
+
 Eigen::AlignedBox3f boxOf(const ObjectModel& model) {
   if (!model.box.isEmpty()) return model.box;
   Eigen::Vector3f lo, hi;
@@ -106,6 +176,8 @@ void ModelSet::add(ObjectModel model, const SurfaceFeatureConfig& feature_config
     model.features = extractSurfaceFeatures(model.mesh, feature_config);
   }
   if (model.collision_hull.empty()) model.collision_hull = collisionHull(model.mesh);
+  if (model.collision_parts.empty())
+    model.collision_parts = collisionParts(model.mesh, model.collision_hull);
   by_name_[model.name] = models_.size();
   models_.push_back(std::make_shared<const ObjectModel>(std::move(model)));
 }

@@ -33,13 +33,6 @@ struct AssociationConfig {
   /// thinner object's smallest extent (a look-alike reported in place of the object): a real
   /// object differs from its mesh by millimetres, so real neighbours overlap a little.
   double merge_cross_class_fraction = 0.5;
-  /// Objects of two classes both measured at one keyframe with at least this inlier ratio r_in
-  /// (the depth agrees with each where it should be visible) ...
-  double merge_supported_inlier_ratio = 0.85;
-  /// ... and at most this occluded ratio r_occ (a phantom inside a real object is mostly hidden
-  /// by it, its few visible points agreeing) are two real objects touching, never merged,
-  /// however their shapes overlap (issue 45: a banana against a block). r_in above 1: off.
-  double merge_supported_max_occlusion = 0.5;
   /// true: one Hungarian assignment per keyframe (all measurements jointly); false: the paper's
   /// greedy order (a later measurement that wants a taken object starts a new one).
   bool joint_assignment = true;

@@ -63,10 +63,6 @@ struct TrackObservation {
   bool refined = false;      ///< depth-refined: tight along the ray in stage I
   bool gated = false;        ///< left out of stage I (residual beyond the gate)
   bool folded = false;       ///< its camera left stage I's window: in ObjectTrack::folded
-  /// r_in and r_occ of the detection at the pose measured (consistency.h), -1 where the depth
-  /// did not determine them or nothing was rendered (B-SLAM): what rules out merging two classes.
-  double inlier_ratio = -1.0;
-  double occluded_ratio = -1.0;
 };
 
 /// An object of the map (confirmed) or a candidate.

@@ -27,7 +27,13 @@ class HullCollider {
                      const Eigen::Isometry3d& T_world_a,
                      const std::shared_ptr<const ObjectModel>& b,
                      const Eigen::Isometry3d& T_world_b);
-  /// Builds the model's FCL hull now (at start, not at the first contact check).
+  /// Interpenetration of the two models' shapes: the deepest over pairs of their convex parts
+  /// (ObjectModel::collision_parts), what penetration() gives for two models their hulls fit.
+  double partsPenetration(const std::shared_ptr<const ObjectModel>& a,
+                          const Eigen::Isometry3d& T_world_a,
+                          const std::shared_ptr<const ObjectModel>& b,
+                          const Eigen::Isometry3d& T_world_b);
+  /// Builds the model's FCL hull and parts now (at start, not at the first contact check).
   void prepare(const std::shared_ptr<const ObjectModel>& model);
   /// Distance between the two hulls, 0 when they touch or intersect.
   double distance(const std::shared_ptr<const ObjectModel>& a, const Eigen::Isometry3d& T_world_a,

@@ -43,6 +43,9 @@ bool loadMesh(const std::string& path, TriangleMesh* mesh, std::string* error);
 TriangleMesh simplifyMesh(const TriangleMesh& mesh, std::size_t target_triangles,
                           double max_error_m, double* achieved_error_m = nullptr);
 
+/// Volume enclosed by a closed mesh with outward triangles (a convex hull's), m^3.
+double enclosedVolume(const TriangleMesh& mesh);
+
 /// Convex hull of the points (qhull through PCL), triangles counter-clockwise seen from outside.
 /// Empty for fewer than 4 points or degenerate (flat) input.
 TriangleMesh convexHull(const std::vector<Eigen::Vector3f>& points);

@@ -42,6 +42,9 @@ struct ObjectModel {
   Eigen::AlignedBox3f box;
   /// Convex hull of a simplified mesh: the shape physics (Bullet) and collision checks (FCL) use.
   TriangleMesh collision_hull;
+  /// Convex parts whose union covers the shape (collisionParts): what a merge's interpenetration
+  /// is measured on. One part, the collision hull, for a model its hull fits.
+  std::vector<TriangleMesh> collision_parts;
 };
 
 /// The model's axis-aligned box in the model frame: the stored one, or the mesh's when none is
@@ -51,6 +54,15 @@ Eigen::AlignedBox3f boxOf(const ObjectModel& model);
 /// The convex collision hull ObjectModel::collision_hull holds (hull of a <= 400-triangle,
 /// <= 2 mm simplification of the mesh).
 TriangleMesh collisionHull(const TriangleMesh& mesh);
+
+/// A convex decomposition of a concave model, made once per model (ModelSet::add): the surface
+/// (points of the <= 400-triangle simplification and samples of it) is cut in two across its
+/// longest principal axis, each half's hull kept, and each half cut again while the halves'
+/// hulls fill less than `fill` of their parent's volume, to at most 2^max_depth parts (halves
+/// overlap by 1 mm so that their union covers the surface). A model its hull fits (a box, a
+/// can) keeps one part: `hull` itself.
+std::vector<TriangleMesh> collisionParts(const TriangleMesh& mesh, const TriangleMesh& hull,
+                                         int max_depth = 3, double fill = 0.95);
 
 class ModelSet {
  public:
