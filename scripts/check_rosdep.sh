@@ -36,6 +36,14 @@ mkdir -p "$tmp/src/geofusion"
 cp "$pkg/package.xml" "$tmp/src/geofusion/"
 mapfile -t keys < <(rosdep keys --from-paths "$tmp/src" --rosdistro "$distro" | sort -u)
 [ ${#keys[@]} -gt 0 ] || { echo "check_rosdep: no keys read from $pkg/package.xml" >&2; exit 1; }
+# All keys in one call (rosdep loads its database once); key by key only when that fails, to name
+# every key that does not resolve.
+if out=$(rosdep resolve "${keys[@]}" --os "$os" --rosdistro "$distro" 2>&1); then
+  awk '/^#ROSDEP\[/ {key = substr($0, 9, length($0) - 9); next} /^#/ {next}
+       {printf "  %-24s -> %s\n", key, $0}' <<<"$out"
+  echo "check_rosdep: all ${#keys[@]} keys of package.xml resolve for $os + $distro"
+  exit 0
+fi
 failed=()
 for key in "${keys[@]}"; do
   if out=$(rosdep resolve "$key" --os "$os" --rosdistro "$distro" 2>&1); then
