@@ -81,6 +81,8 @@ mount_chroot() {
   mkdir -p "$chroots/ccache-$(basename "$dir")"
   mount --bind "$chroots/ccache-$(basename "$dir")" "$dir/ccache"
   cp /etc/resolv.conf "$dir/etc/resolv.conf" 2>/dev/null || true
+  # roslaunch resolves localhost and the machine's name: a minimal chroot has no /etc/hosts.
+  cp /etc/hosts "$dir/etc/hosts" 2>/dev/null || printf '127.0.0.1 localhost\n::1 localhost\n' > "$dir/etc/hosts"
   # This machine's trust (a proxy's certificate authority among them) for pip inside.
   if [ -f /etc/ssl/certs/ca-certificates.crt ]; then
     mkdir -p "$dir/etc/ssl/certs"
