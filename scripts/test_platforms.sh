@@ -12,7 +12,8 @@
 # Usage: scripts/test_platforms.sh RELEASE...   (bullseye | bookworm | trixie; default: bullseye trixie)
 # Needs root (mmdebstrap, mount, chroot). Environment: GEOFUSION_CHROOT_DIR (default
 # ~/.cache/geofusion/chroots), GEOFUSION_SHARED (default ../shared beside the source tree),
-# CTEST_ARGS (extra ctest arguments, e.g. "-R test_core").
+# CTEST_ARGS (extra ctest arguments, e.g. "-R test_core"), GEOFUSION_REUSE_BUILD=1 (run the tests
+# again in the workspace the last run built, without copying or building).
 set -euo pipefail
 source "$(dirname "$0")/env.sh"
 
@@ -117,6 +118,9 @@ if [ "$RELEASE" = bullseye ]; then
 fi
 echo "[geofusion] $RELEASE: $(cmake --version | head -n1), $(${CXX:-c++} --version | head -n1), $(python3 --version), numpy $(python3 -c 'import numpy; print(numpy.__version__)')"
 cd /ws
+if [ "$REUSE_BUILD" = 1 ]; then
+  echo "[geofusion] $RELEASE: the workspace built before, tests only"
+else
 args=(-j2 -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 -DCMAKE_BUILD_TYPE=Release)
 start=$(date +%s)
 set +u
@@ -126,6 +130,7 @@ catkin_make --force-cmake "${args[@]}"
 catkin_make "${args[@]}" all tests
 set -u
 echo "[geofusion] $RELEASE: build took $(( $(date +%s) - start )) s"
+fi
 bash /ws/src/geofusion/scripts/python_env.sh
 start=$(date +%s)
 cd /ws/build
@@ -143,10 +148,12 @@ test_release() {
   local release="$1" dir="$chroots/$1" status=0
   release_extras "$release" >/dev/null
   make_chroot "$release" "$dir"
-  rm -rf "$dir/ws" && mkdir -p "$dir/ws/src/geofusion"
-  (cd "$GEOFUSION_SRC" && git ls-files -co --exclude-standard -z | tar --null -T - -cf -) \
-    | tar -xf - -C "$dir/ws/src/geofusion"
-  say "$release: $(cd "$GEOFUSION_SRC" && git describe --always --dirty) copied into $dir/ws/src/geofusion"
+  if [ "${GEOFUSION_REUSE_BUILD:-0}" != 1 ]; then
+    rm -rf "$dir/ws" && mkdir -p "$dir/ws/src/geofusion"
+    (cd "$GEOFUSION_SRC" && git ls-files -co --exclude-standard -z | tar --null -T - -cf -) \
+      | tar -xf - -C "$dir/ws/src/geofusion"
+    say "$release: $(cd "$GEOFUSION_SRC" && git describe --always --dirty) copied into $dir/ws/src/geofusion"
+  fi
   # The demo recording this machine made (if any), so that every release maps the same frames
   # and bench_demo's reports compare (Bullet and the compilers settle generated scenes a little
   # differently on each release).
@@ -163,8 +170,11 @@ test_release() {
   done
   [ -f /etc/ssl/certs/ca-certificates.crt ] && pass+=(SSL_CERT_FILE=/etc/ssl/certs/ca-certificates.crt
     PIP_CERT=/etc/ssl/certs/ca-certificates.crt REQUESTS_CA_BUNDLE=/etc/ssl/certs/ca-certificates.crt)
-  inside_script | chroot "$dir" /usr/bin/env -i PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
-    RELEASE="$release" CTEST_ARGS="${CTEST_ARGS:-}" "${pass[@]}" bash -s || status=$?
+  # The script as a file, stdin empty: a test reading stdin must not eat the script's lines.
+  inside_script > "$dir/geofusion-inside.sh"
+  chroot "$dir" /usr/bin/env -i PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
+    RELEASE="$release" CTEST_ARGS="${CTEST_ARGS:-}" REUSE_BUILD="${GEOFUSION_REUSE_BUILD:-0}" "${pass[@]}" \
+    bash /geofusion-inside.sh </dev/null || status=$?
   unmount_chroot "$dir"
   trap - EXIT
   if [ -f "$dir/ws/build/geofusion/bench_demo/report.md" ]; then
