@@ -21,7 +21,18 @@ void expectNothingFloats(const ClutterScene& scene, const ClutterConfig& config)
               scene.objects[i].T_world_obj.translation().z())
         resting = true;
     }
-    EXPECT_TRUE(resting) << scene.objects[i].model->name << " #" << i << " floats";
+    if (resting) continue;
+    // What is nearest, to tell a float from a lean on something taller.
+    int nearest = -1;
+    double gap = hullDistance(scene, -1, i);
+    for (int j = 0; j < n; ++j) {
+      if (j != i && hullDistance(scene, i, j) < gap) gap = hullDistance(scene, i, j), nearest = j;
+    }
+    ADD_FAILURE() << scene.objects[i].model->name << " #" << i << " floats: nearest "
+                  << (nearest < 0 ? std::string("table") : scene.objects[nearest].model->name)
+                  << " #" << nearest << " " << 1000 * gap << " mm away, centres at z "
+                  << scene.objects[i].T_world_obj.translation().z() << " and "
+                  << (nearest < 0 ? 0.0 : scene.objects[nearest].T_world_obj.translation().z());
   }
 }
 
