@@ -147,15 +147,10 @@ std::vector<TriangleMesh> collisionParts(const TriangleMesh& mesh, const Triangl
   std::vector<Eigen::Vector3f> points = light.vertices;
   const std::vector<Eigen::Vector3f> samples = sampleSurfacePoints(light, 3000, 11);
   points.insert(points.end(), samples.begin(), samples.end());
+  // Starting from the collision hull: where it fits, it is the one part (the shape the other
+  // checks use).
   std::vector<TriangleMesh> parts;
-  std::vector<Eigen::Vector3f> lower, upper;
-  splitAcrossLongestAxis(points, 0.001f, &lower, &upper);
-  const TriangleMesh lower_hull = convexHull(lower), upper_hull = convexHull(upper);
-  if (max_depth < 1 || lower_hull.empty() || upper_hull.empty() ||
-      enclosedVolume(lower_hull) + enclosedVolume(upper_hull) >= fill * enclosedVolume(hull))
-    return {hull};  // the hull fits: the shape the other checks use
-  addParts(lower, lower_hull, max_depth - 1, fill, &parts);
-  addParts(upper, upper_hull, max_depth - 1, fill, &parts);
+  addParts(points, hull, max_depth, fill, &parts);
   return parts;
 }
 
