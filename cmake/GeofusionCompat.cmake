@@ -93,3 +93,17 @@ function(geofusion_python_extension target)
       SUFFIX "${PYTHON_MODULE_EXTENSION}")
   endif()
 endfunction()
+
+# The Qt the rviz panel links: the one rviz itself was built with (rviz-extras.cmake's
+# rviz_QT_VERSION: 5 on Noetic and Debian 11/12, 6 on Debian 13). A plugin on another Qt than
+# rviz's loads a second QtWidgets and fails ("Must construct a QApplication before a QWidget").
+# Call after find_package(rviz); sets GEOFUSION_QT_WIDGETS to the target to link.
+macro(geofusion_find_rviz_qt)
+  set(_geofusion_qt_major 5)
+  if(rviz_QT_VERSION)
+    string(REGEX MATCH "^[0-9]+" _geofusion_qt_major "${rviz_QT_VERSION}")
+  endif()
+  find_package(Qt${_geofusion_qt_major} REQUIRED COMPONENTS Widgets)
+  set(GEOFUSION_QT_WIDGETS Qt${_geofusion_qt_major}::Widgets)
+  message(STATUS "geofusion: rviz ${rviz_VERSION} built with Qt ${rviz_QT_VERSION}: the panel links ${GEOFUSION_QT_WIDGETS}")
+endmacro()

@@ -27,7 +27,16 @@ PACKAGES=(
   python3-rosdep2
 )
 
-# --print: the list, one name a line (scripts/test_platforms.sh installs the same list in its chroots).
+# Per release: the Qt whose widgets rviz is built with (the map panel plugin links the same one;
+# Debian 13's rviz 1.14.25 is built with Qt 6).
+# (`--print RELEASE`: the list for that release, e.g. trixie; default: this machine's.)
+codename=${2:-$(. /etc/os-release 2>/dev/null && echo "${VERSION_CODENAME:-}")}
+case "$codename" in
+  bullseye|bookworm|focal) PACKAGES+=(qtbase5-dev) ;;
+  *) PACKAGES+=(qt6-base-dev) ;;
+esac
+
+# --print [RELEASE]: the list, one name a line (scripts/test_platforms.sh installs the same list in its chroots).
 if [ "${1:-}" = "--print" ]; then
   printf '%s\n' "${PACKAGES[@]}"
   exit 0

@@ -49,7 +49,7 @@ release_extras() {
 
 make_chroot() {
   local release="$1" dir="$2" list mirror start
-  list="$(bash "$GEOFUSION_SRC/scripts/install_deps.sh" --print | tr '\n' ' ') $(release_extras "$release")"
+  list="$(bash "$GEOFUSION_SRC/scripts/install_deps.sh" --print "$release" | tr '\n' ' ') $(release_extras "$release")"
   if [ -f "$dir/.geofusion-release" ]; then
     # Kept from an earlier run: only what the list gained since is installed.
     say "$release: reusing the chroot $dir"

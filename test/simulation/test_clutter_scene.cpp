@@ -1,5 +1,6 @@
 // Physically settled clutter scenes (Bullet) checked with FCL, and their contact graphs.
 #include "geofusion/simulation/clutter_scene.h"
+#include "geofusion/simulation/dataset.h"
 
 #include "test_data.h"
 
@@ -96,17 +97,27 @@ TEST(ClutterScene, YcbSceneOfEighteenObjects) {
   ModelSet models;
   std::vector<std::string> errors;
   ASSERT_TRUE(test::loadYcbModels(&models, &errors));
-  ClutterConfig config;
-  config.num_objects = 18;
+  // Made the way every data set makes its scenes (makeSuiteScene: seed 5, and the next seeds
+  // when a settled scene breaks the penetration bound). Bullet settles the same seed differently
+  // with another compiler: with GCC 14 (Debian 13) seed 5 rests two objects 1.6 mm into each
+  // other and the second seed is taken.
+  SuiteSpec suite;
+  SceneSpec spec;
+  spec.seed = 5;
+  spec.num_objects = 18;
+  const ClutterConfig& config = suite.clutter;
   ClutterScene scene;
   std::string report;
-  ASSERT_TRUE(makeClutterScene(models, config, 5, &scene, &report)) << report;
-  EXPECT_LE(scene.max_penetration_m, 0.001);
+  unsigned seed = 0;
+  ASSERT_TRUE(makeSuiteScene(suite, spec, models, &scene, &seed, &report, 3)) << report;
+  EXPECT_LE(scene.max_penetration_m, config.max_penetration_m);
+  EXPECT_EQ(scene.objects.size(), 18u);
   expectNothingFloats(scene, config);
   std::set<std::string> classes;
   for (const auto& o : scene.objects) classes.insert(o.model->name);
   EXPECT_GE(classes.size(), 8u);
-  std::cout << report << "\n";
+  std::cout << "seed " << seed << ": " << scene.objects.size() << " objects, deepest "
+            << scene.max_penetration_m * 1000.0 << " mm\n";
 }
 
 }  // namespace
