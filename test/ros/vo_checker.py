@@ -78,6 +78,9 @@ class VisualOdometryReplayTest(unittest.TestCase):
             odom = list(self.odom)
         self.assertGreaterEqual(len(odom), FRAMES - 5, 'frames without odometry')
         truth = {round(f['stamp'], 3): matrix(f['map_base']) for f in gt['frames']}
+        # The camera on the base (the head moves: base -> camera changes frame to frame).
+        base_camera = {round(f['stamp'], 3): mul(inv(matrix(f['map_base'])),
+                                                 matrix(f['map_camera'])) for f in gt['frames']}
         first = odom[0]
         self.assertEqual(first.header.frame_id, 'odom')
         self.assertEqual(first.child_frame_id, util.BASE_FRAME)
@@ -85,23 +88,32 @@ class VisualOdometryReplayTest(unittest.TestCase):
         p = first.pose.pose
         self.assertLess(math.hypot(p.position.x, p.position.y, p.position.z), 1e-6)
         true0 = truth[round(first.header.stamp.to_sec(), 3)]
-        worst_t, worst_r, last_cov = 0.0, 0.0, None
+        worst_t, worst_r, worst_cam, last_cov = 0.0, 0.0, 0.0, None
         for m in odom:
             p = m.pose.pose
             est = matrix([p.position.x, p.position.y, p.position.z, p.orientation.x,
                           p.orientation.y, p.orientation.z, p.orientation.w])
-            true = mul(inv(true0), truth[round(m.header.stamp.to_sec(), 3)])
+            stamp = round(m.header.stamp.to_sec(), 3)
+            true = mul(inv(true0), truth[stamp])
             err = mul(inv(true), est)
             worst_t = max(worst_t, math.hypot(err[0][3], err[1][3], err[2][3]))
             worst_r = max(worst_r, angle(err))
+            cam_err = mul(inv(mul(true, base_camera[stamp])), mul(est, base_camera[stamp]))
+            worst_cam = max(worst_cam, math.hypot(cam_err[0][3], cam_err[1][3], cam_err[2][3]))
             cov = m.pose.covariance
             self.assertTrue(all(cov[7 * i] > 0.0 for i in range(6)), 'covariance not positive')
             last_cov = cov
-        # The base moves over 0.1 m in the 2.5 s: the visual odometry follows it within 2 cm.
+        # The base moves over 0.1 m in the 2.5 s: the camera, which the visual odometry tracks,
+        # follows the truth within 2 cm and 1 degree. The base is 1.1-1.3 m below the camera: an
+        # orientation error within that 1 degree moves it up to 2.3 cm more (2 cm + 1.3 m x 1
+        # degree = 4.3 cm bounds it). Measured: OpenCV 4.6 (Debian 12) camera 0.95 cm, base
+        # 1.36 cm, 0.68 deg; OpenCV 4.10 (Debian 13, other ORB features) 1.30 cm, 2.60 cm, 0.97 deg.
         end = mul(inv(true0), truth[round(odom[-1].header.stamp.to_sec(), 3)])
         self.assertGreater(math.hypot(end[0][3], end[1][3]), 0.1)
-        self.assertLess(worst_t, 0.02)
+        print('worst errors: camera %.4f m, base %.4f m, %.2f deg' % (worst_cam, worst_t, worst_r))
+        self.assertLess(worst_cam, 0.02)
         self.assertLess(worst_r, 1.0)
+        self.assertLess(worst_t, 0.02 + 1.3 * math.radians(worst_r))
         self.assertGreater(last_cov[0], first.pose.covariance[0], 'uncertainty did not grow')
         # TF odom -> base_link carries the same poses.
         mid = odom[len(odom) // 2]
