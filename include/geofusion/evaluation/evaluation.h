@@ -31,6 +31,23 @@ struct MapScore {
 MapScore scoreMap(const ClutterScene& scene, const std::vector<ObjectEstimate>& objects,
                   double max_adds_m = 0.05);
 
+/// Where a part of the map lies against its scene: T_true_map brings the map's objects onto the
+/// scene's objects (scene world frame) with no starting guess, so that a table the robot reached
+/// after a long drive (odometry drift of metres and tens of degrees) is scored on its own.
+struct SceneAlignment {
+  Eigen::Isometry3d T_true_map = Eigen::Isometry3d::Identity();
+  int inliers = 0;     ///< map objects within inlier_m of a scene object of their class
+  double rmse_m = 0.0;  ///< over the inliers, after the alignment
+};
+
+/// Hypotheses from every two map objects paired with two scene objects of the same classes at the
+/// same distance apart (a planar motion: a turn about z and a shift, the drift of a ground robot's
+/// odometry); the one that brings most map objects within `inlier_m` of a scene object of their
+/// class wins and is refined on them (least squares, planar too). Identity and 0 inliers when no
+/// two objects agree.
+SceneAlignment alignMapToScene(const ClutterScene& scene, const std::vector<ObjectEstimate>& objects,
+                               double inlier_m = 0.05);
+
 /// Number of scene objects that `frames` detect (true class) in at least `min_frames` frames.
 int objectsDetectedInFrames(const ClutterScene& scene, const std::vector<SequenceFrame>& frames,
                             int min_frames);
