@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <string>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -397,6 +398,21 @@ Plane tableOf(const GroundTruth& gt, const RunResults& results, const RunEvaluat
   return table;
 }
 
+// "class #id (true)" or "(false)" for map object i: how evaluate_run names an implausible pair.
+std::string describeMapObject(const std::vector<ObjectEstimate>& map, const MapScore& score,
+                              std::size_t i) {
+  const bool matched = i < score.match.size() && score.match[i] >= 0;
+  return map[i].model->name + " #" + std::to_string(map[i].id) + (matched ? " (true)" : " (false)");
+}
+
+// Appends `value` to `values`, and names the pair when it is the largest so far.
+void recordPairValue(double value, const std::string& pair, std::vector<double>* values,
+                     std::string* largest_pair) {
+  if (values->empty() || value > *std::max_element(values->begin(), values->end()))
+    *largest_pair = pair;
+  values->push_back(value);
+}
+
 // Physical plausibility in the estimate's own frame: interpenetration of touching pairs and of
 // objects with the table, and the gaps of the true support contacts between matched objects.
 void evaluatePlausibility(const GroundTruth& gt, const RunResults& results, const MapScore& score,
@@ -411,7 +427,8 @@ void evaluatePlausibility(const GroundTruth& gt, const RunResults& results, cons
     // stray estimate on the floor) does not interpenetrate the table; it is a false object.
     const auto [low, high] = heightsAbove(*map[i].model, map[i].T_map_obj, table);
     if (low < config.touch_distance_m && high > 0.0)
-      ev->penetration_m.push_back(std::max(0.0, -low));
+      recordPairValue(std::max(0.0, -low), "table / " + describeMapObject(map, score, i),
+                      &ev->penetration_m, &ev->deepest_pair);
     for (std::size_t j = i + 1; j < map.size(); ++j) {
       const double centres =
           (map[i].T_map_obj.translation() - map[j].T_map_obj.translation()).norm();
@@ -420,7 +437,9 @@ void evaluatePlausibility(const GroundTruth& gt, const RunResults& results, cons
           collider.penetration(map[i].model, map[i].T_map_obj, map[j].model, map[j].T_map_obj);
       if (depth > 0.0 || collider.distance(map[i].model, map[i].T_map_obj, map[j].model,
                                            map[j].T_map_obj) < config.touch_distance_m)
-        ev->penetration_m.push_back(depth);
+        recordPairValue(depth,
+                        describeMapObject(map, score, i) + " / " + describeMapObject(map, score, j),
+                        &ev->penetration_m, &ev->deepest_pair);
     }
   }
   std::map<int, std::size_t> estimate_of;  // true index -> map index
@@ -429,11 +448,15 @@ void evaluatePlausibility(const GroundTruth& gt, const RunResults& results, cons
   for (const GraphContact& c : ev->graph_true_contacts) {
     if (!estimate_of.count(c.b) || (c.a >= 0 && !estimate_of.count(c.a))) continue;
     const ObjectEstimate& b = map[estimate_of[c.b]];
+    const std::string b_name = describeMapObject(map, score, estimate_of[c.b]);
     if (c.a < 0) {
-      ev->gap_m.push_back(std::max(0.0, lowestAbove(*b.model, b.T_map_obj, table)));
+      recordPairValue(std::max(0.0, lowestAbove(*b.model, b.T_map_obj, table)), "table / " + b_name,
+                      &ev->gap_m, &ev->widest_gap_pair);
     } else {
       const ObjectEstimate& a = map[estimate_of[c.a]];
-      ev->gap_m.push_back(collider.distance(a.model, a.T_map_obj, b.model, b.T_map_obj));
+      recordPairValue(collider.distance(a.model, a.T_map_obj, b.model, b.T_map_obj),
+                      describeMapObject(map, score, estimate_of[c.a]) + " / " + b_name, &ev->gap_m,
+                      &ev->widest_gap_pair);
     }
   }
 }
@@ -785,7 +808,9 @@ bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::s
                     {"surviving_swaps", e.surviving_swaps},
                     {"contacts", contactCountsJson(e)},
                     {"penetration_mm", scaled(e.penetration_m, 1000.0)},
-                    {"gap_mm", scaled(e.gap_m, 1000.0)}};
+                    {"gap_mm", scaled(e.gap_m, 1000.0)},
+                    {"deepest_pair", e.deepest_pair},
+                    {"widest_gap_pair", e.widest_gap_pair}};
   j["lifecycle"] = lifecycleJson(e);
   j["trajectory"] = {{"ate_rmse_m", e.alignment_rmse_m},
                      {"odometry_ate_rmse_m", e.odometry_ate_rmse_m}};
@@ -861,6 +886,10 @@ std::string summarize(const RunEvaluation& e) {
                 1000 * mean(e.penetration_m), 1000 * maxOf(e.penetration_m), e.penetration_m.size(),
                 1000 * mean(e.gap_m), 1000 * maxOf(e.gap_m));
   s << line;
+  if (!e.deepest_pair.empty() && maxOf(e.penetration_m) > 0.0)
+    s << "    deepest: " << e.deepest_pair << "\n";
+  if (!e.widest_gap_pair.empty() && maxOf(e.gap_m) > 0.0)
+    s << "    widest gap: " << e.widest_gap_pair << "\n";
   // The mean carries the solves made only every N-th keyframe (B-SLAM's stage I), which the
   // median does not see.
   std::snprintf(line, sizeof(line),

@@ -8,7 +8,7 @@
 //       [--model-set YAML] [--scenes bench_01,...] [--keyframes N] [--image-every N]
 //       [--detector densefusion|posecnn|densefusion_persistent|rgb]
 //       [--sensor nguyen2012|structured_light|active_stereo|time_of_flight] [--lens
-//       primesense|none]
+//       primesense|none] [--colour fetch_head|none]
 //       [--depth-encoding 16UC1|32FC1] [--no-compression] [--previews N] [--force]
 #include "command_line.h"
 #include "geofusion/evaluation/sequence_calibration.h"
@@ -41,6 +41,7 @@ struct Options {
   std::string detector;  ///< "": the suite's own preset
   std::string sensor;    ///< "": the suite's own depth camera model
   std::string lens;      ///< "": the suite's own lens (primesense or none)
+  std::string colour;    ///< "": the suite's own colour camera model (fetch_head or none)
   std::string depth_encoding = "16UC1";
   bool compress = true;
   int previews = 4;
@@ -54,7 +55,8 @@ void usage() {
          "         [--models DIR] [--model-set YAML] [--scenes NAME,NAME] [--keyframes N]\n"
          "         [--image-every N] [--detector densefusion|posecnn|densefusion_persistent|rgb]\n"
          "         [--sensor nguyen2012|structured_light|active_stereo|time_of_flight]\n"
-         "         [--lens primesense|none] [--depth-encoding 16UC1|32FC1]\n"
+         "         [--lens primesense|none] [--colour fetch_head|none]\n"
+         "         [--depth-encoding 16UC1|32FC1]\n"
          "         [--no-compression] [--previews N=4] [--force]\n"
          "  --out-dir      default $GEOFUSION_DATA/<suite>, else ~/.cache/geofusion/data/<suite>\n"
          "  --models       YCB-Video models folder (bench); default $GEOFUSION_YCB_DIR, else\n"
@@ -67,6 +69,8 @@ void usage() {
          "                 Fetch head camera, for the bench suites; nguyen2012 for the others)\n"
          "  --lens         lens distortion of the images and camera_info (default the suite's:\n"
          "                 primesense for the bench suites, none for the others)\n"
+         "  --colour       colour camera's blur, rolling shutter, exposure and noise (default\n"
+         "                 the suite's: fetch_head for the vo suites, none for the others)\n"
          "  --previews     keyframes per scene written as PNG into <out-dir>/previews\n"
          "  --force        regenerate scenes whose cached files match the request\n";
 }
@@ -101,6 +105,7 @@ Options parse(int argc, char** argv) {
   args.value("--detector", &o.detector);
   args.value("--sensor", &o.sensor);
   args.value("--lens", &o.lens);
+  args.value("--colour", &o.colour);
   args.value("--depth-encoding", &o.depth_encoding);
   args.toggle("--no-compression", &o.compress, false);
   args.value("--previews", &o.previews);
@@ -119,6 +124,8 @@ Options parse(int argc, char** argv) {
   }
   if (!o.lens.empty() && o.lens != "primesense" && o.lens != "none")
     throw std::runtime_error("--lens must be primesense or none");
+  if (!o.colour.empty() && o.colour != "fetch_head" && o.colour != "none")
+    throw std::runtime_error("--colour must be fetch_head or none");
   if (o.keyframes == 0 || o.keyframes < -1 || o.image_every == 0 || o.image_every < -1) {
     throw std::runtime_error("--keyframes and --image-every must be > 0");
   }
@@ -179,6 +186,8 @@ bool applyOptions(Options* opt, geofusion::SuiteSpec* suite) {
   opt->sensor = suite->depth.name;
   if (opt->lens == "primesense") suite->lens = LensDistortion::primesense();
   if (opt->lens == "none") suite->lens = LensDistortion{};
+  if (opt->colour == "fetch_head") suite->colour = ColourNoise::fetchHead();
+  if (opt->colour == "none") suite->colour = ColourNoise{};
   if (!opt->scenes.empty()) {
     std::vector<SceneSpec> chosen;
     for (const std::string& name : opt->scenes) {

@@ -162,6 +162,9 @@ struct RunEvaluation {
   ContactCounts contacts_by_kind[3];
   std::vector<double> penetration_m;  ///< per touching or intersecting pair (object or table)
   std::vector<double> gap_m;          ///< per true support of a matched object
+  /// The pairs behind the maxima: "class #id (true|false) / class #id (...)" ("table" for the
+  /// table), for finding what makes a map implausible; empty when there is none.
+  std::string deepest_pair, widest_gap_pair;
   std::vector<GraphObject> graph_true_objects, graph_estimated_objects;
   std::vector<GraphContact> graph_true_contacts, graph_estimated_contacts;
 
