@@ -314,6 +314,9 @@ class Table {
     real("association.merge_cross_class_fraction", 0, 1,
          "objects of two classes merge only past this share of the thinner one's extent",
          [f](GeoFusionConfig& c) { return &f(c)->merge_cross_class_fraction; });
+    flag("association.merge_on_convex_parts",
+         "interpenetration for merging on each model's convex parts (false: one hull each)",
+         [f](GeoFusionConfig& c) { return &f(c)->merge_on_convex_parts; });
     flag("association.joint_assignment",
          "one Hungarian assignment per keyframe (false: the paper's greedy order)",
          [f](GeoFusionConfig& c) { return &f(c)->joint_assignment; });

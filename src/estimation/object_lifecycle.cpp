@@ -122,7 +122,10 @@ bool mappedTwice(const ObjectTrack& a, const Eigen::Isometry3d& T_a, const Objec
     needed = std::max(needed, config.merge_cross_class_fraction * thinnest);
   // Measured on the shapes (their convex parts), not on one hull: a hull spans the air inside a
   // banana's curve or a mug's handle, where a neighbour can lie (issue 45).
-  return collider->partsPenetration(a.model, T_a, b.model, T_b) >= needed;
+  const double depth = config.merge_on_convex_parts
+                           ? collider->partsPenetration(a.model, T_a, b.model, T_b)
+                           : collider->penetration(a.model, T_a, b.model, T_b);
+  return depth >= needed;
 }
 
 void absorb(const ObjectTrack& dropped, ObjectTrack* kept) {

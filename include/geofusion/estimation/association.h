@@ -33,6 +33,10 @@ struct AssociationConfig {
   /// thinner object's smallest extent (a look-alike reported in place of the object): a real
   /// object differs from its mesh by millimetres, so real neighbours overlap a little.
   double merge_cross_class_fraction = 0.5;
+  /// The interpenetration measured on each model's convex parts (ObjectModel::collision_parts:
+  /// a banana or a clamp in pieces, issue 45); false: on one convex hull per model (the paper's
+  /// test as built before, for comparison: a hull spans the air inside a curve or a handle).
+  bool merge_on_convex_parts = true;
   /// true: one Hungarian assignment per keyframe (all measurements jointly); false: the paper's
   /// greedy order (a later measurement that wants a taken object starts a new one).
   bool joint_assignment = true;
