@@ -485,6 +485,9 @@ class Table {
          [f](GeoFusionConfig& c) { return &f(c)->leaning_contacts; });
     flag("stage_two.side_contacts", "side-by-side contacts join stage II (beside the supports)",
          [f](GeoFusionConfig& c) { return &f(c)->side_contacts; });
+    flag("stage_two.lift_out_of_support",
+         "an object deeper through the support plane than the contacts reach is lifted onto it",
+         [f](GeoFusionConfig& c) { return &f(c)->lift_out_of_support; });
   }
   void background() {
     flag("background.enabled", "build the OctoMap of the static background",

@@ -207,6 +207,20 @@ std::shared_ptr<ObjectModel> supportPlaneModel(const SupportPlane& plane,
   return model;
 }
 
+double depthThroughPlane(const SupportPlane& plane, const ObjectModel& model,
+                         const Eigen::Isometry3d& T_map_obj, double margin_m) {
+  if (!plane.valid) return 0.0;
+  const Eigen::Vector3d in_plane = plane.axes.transpose() * (T_map_obj.translation() - plane.centre);
+  if (std::abs(in_plane.x()) > 0.5 * plane.size.x() + margin_m ||
+      std::abs(in_plane.y()) > 0.5 * plane.size.y() + margin_m)
+    return 0.0;
+  const TriangleMesh& hull = model.collision_hull.empty() ? model.mesh : model.collision_hull;
+  double lowest = 0.0;
+  for (const Eigen::Vector3f& v : hull.vertices)
+    lowest = std::min(lowest, plane.normal.dot(T_map_obj * v.cast<double>()) - plane.height);
+  return -lowest;
+}
+
 std::vector<FeatureContact> inferRelations(const std::vector<PosedModel>& objects,
                                            const PosedModel* ground, const Eigen::Vector3d& gravity,
                                            const ContactConfig& config,

@@ -733,7 +733,15 @@ StageReport SceneEstimator::runRelationsAndStageTwo(const Keyframe* kf, StageTim
   }
   const StageTwoSummary s = optimizeStageTwo(&poses, models, priors, local_contacts,
                                              support_model_ ? &ground : nullptr, config_.stage_two);
-  for (std::size_t i = 0; i < local.size(); ++i) tracks_[reported[local[i]]].T_refined = poses[i];
+  for (std::size_t i = 0; i < local.size(); ++i) {
+    Track& tr = tracks_[reported[local[i]]];
+    tr.T_refined = poses[i];
+    // Nothing stays in the table: an estimate through its top deeper than a contact can
+    // resolve rests on it instead.
+    const double depth = depthThroughPlane(support_, *tr.model, tr.T_refined);
+    if (config_.stage_two.lift_out_of_support && depth > config_.contacts.max_penetration_m)
+      tr.T_refined.translation() += depth * support_.normal;
+  }
   // Candidates follow their stage I / initial pose.
   for (Track& tr : tracks_)
     if (!tr.confirmed) tr.T_refined = tr.T_stage_one;

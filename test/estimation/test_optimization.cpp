@@ -420,6 +420,27 @@ TEST(Relations, SupportPlaneFromRenderedDepth) {
       estimateSupportPlane({empty.data(), K.width, K.height}, K, T_map_cam, kGravity).valid);
 }
 
+// How far an estimate reaches through the table top (the estimator lifts one deeper than the
+// contacts reach: stage_two.lift_out_of_support).
+TEST(Relations, DepthThroughTheSupportPlane) {
+  const TableDepth scene = renderTableWithBox();
+  const SupportPlane plane =
+      estimateSupportPlane(scene.depth(), scene.K, scene.T_map_cam, kGravity);
+  ASSERT_TRUE(plane.valid);
+  ObjectModel box;
+  box.mesh = makeBox(Eigen::Vector3d(0.1, 0.1, 0.2));
+  // Resting on it, 5 cm into it, tipped 90 degrees and 4 cm into it.
+  EXPECT_LT(depthThroughPlane(plane, box, at(0.2, 0.1, 0.85)), 0.004);
+  EXPECT_NEAR(depthThroughPlane(plane, box, at(0.2, 0.1, 0.80)), 0.05, 0.004);
+  Eigen::Isometry3d tipped = at(0.2, -0.1, 0.76);
+  tipped.linear() = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  EXPECT_NEAR(depthThroughPlane(plane, box, tipped), 0.04, 0.004);
+  // Beside the table (on the floor, 2 m away): nothing to do with this plane.
+  EXPECT_EQ(depthThroughPlane(plane, box, at(2.5, 0.1, 0.3)), 0.0);
+  // No plane, no depth.
+  EXPECT_EQ(depthThroughPlane(SupportPlane{}, box, at(0.2, 0.1, 0.80)), 0.0);
+}
+
 TEST(Relations, AKnownSupportPlaneIsFollowedOrSearchedAgain) {
   const TableDepth scene = renderTableWithBox();
   const auto& [K, T_map_cam] = std::tie(scene.K, scene.T_map_cam);

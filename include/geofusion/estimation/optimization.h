@@ -170,6 +170,11 @@ struct StageTwoConfig {
   /// `bench`, more flip-flops: docs/BENCHMARK.md).
   bool leaning_contacts = true;
   bool side_contacts = false;
+  /// An object reaching through the support plane deeper than contacts.max_penetration_m has no
+  /// contact with it (the relations stop there) and stage II would leave it in the table: true
+  /// lifts it along the plane's normal onto the plane after stage II (issue 45: estimates 4-12
+  /// cm through the table top on the bench suites, all of them false objects but one).
+  bool lift_out_of_support = true;
   /// The local map: the relations, stage II and the overlap merge look at the objects seen in
   /// the latest N keyframes and those in contact with them; the others keep their pose and
   /// contacts until seen again (their cost stays bounded on long runs). 0: every object, every

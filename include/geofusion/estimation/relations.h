@@ -66,6 +66,12 @@ std::shared_ptr<ObjectModel> supportPlaneModel(const SupportPlane& plane,
                                                Eigen::Isometry3d* T_map_model,
                                                double thickness_m = 0.03);
 
+/// How far an object reaches through the plane, metres (0 when it does not): the depth of its
+/// collision hull's lowest vertex below the plane, for an object whose centre lies over the
+/// plane's extent (a margin of `margin_m` around it); 0 for anything beside it.
+double depthThroughPlane(const SupportPlane& plane, const ObjectModel& model,
+                         const Eigen::Isometry3d& T_map_obj, double margin_m = 0.05);
+
 /// Contacts among posed objects and, when `ground` is given, with it (object index -1); the
 /// pairs in `held` (the same indices; in contact at the previous keyframe) with the hysteresis
 /// thresholds.
