@@ -210,7 +210,8 @@ std::shared_ptr<ObjectModel> supportPlaneModel(const SupportPlane& plane,
 double depthThroughPlane(const SupportPlane& plane, const ObjectModel& model,
                          const Eigen::Isometry3d& T_map_obj, double margin_m) {
   if (!plane.valid) return 0.0;
-  const Eigen::Vector3d in_plane = plane.axes.transpose() * (T_map_obj.translation() - plane.centre);
+  const Eigen::Vector3d in_plane =
+      plane.axes.transpose() * (T_map_obj.translation() - plane.centre);
   if (std::abs(in_plane.x()) > 0.5 * plane.size.x() + margin_m ||
       std::abs(in_plane.y()) > 0.5 * plane.size.y() + margin_m)
     return 0.0;

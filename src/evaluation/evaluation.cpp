@@ -121,8 +121,8 @@ Eigen::Isometry3d planarFit(const std::vector<Eigen::Vector3d>& est,
 
 }  // namespace
 
-SceneAlignment alignMapToScene(const ClutterScene& scene, const std::vector<ObjectEstimate>& objects,
-                               double inlier_m) {
+SceneAlignment alignMapToScene(const ClutterScene& scene,
+                               const std::vector<ObjectEstimate>& objects, double inlier_m) {
   AlignmentPoints p;
   for (const ObjectEstimate& o : objects) {
     if (!o.model) continue;

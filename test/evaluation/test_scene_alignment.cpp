@@ -42,7 +42,8 @@ DriftedMap drifted(const ModelSet& models, const Eigen::Isometry3d& T_map_true, 
 
 Eigen::Isometry3d planarDrift(double x, double y, double yaw_deg) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T.linear() =
+      Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   T.translation() = Eigen::Vector3d(x, y, 0.0);
   return T;
 }

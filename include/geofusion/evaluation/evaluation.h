@@ -36,7 +36,7 @@ MapScore scoreMap(const ClutterScene& scene, const std::vector<ObjectEstimate>& 
 /// after a long drive (odometry drift of metres and tens of degrees) is scored on its own.
 struct SceneAlignment {
   Eigen::Isometry3d T_true_map = Eigen::Isometry3d::Identity();
-  int inliers = 0;     ///< map objects within inlier_m of a scene object of their class
+  int inliers = 0;      ///< map objects within inlier_m of a scene object of their class
   double rmse_m = 0.0;  ///< over the inliers, after the alignment
 };
 
@@ -45,8 +45,8 @@ struct SceneAlignment {
 /// odometry); the one that brings most map objects within `inlier_m` of a scene object of their
 /// class wins and is refined on them (least squares, planar too). Identity and 0 inliers when no
 /// two objects agree.
-SceneAlignment alignMapToScene(const ClutterScene& scene, const std::vector<ObjectEstimate>& objects,
-                               double inlier_m = 0.05);
+SceneAlignment alignMapToScene(const ClutterScene& scene,
+                               const std::vector<ObjectEstimate>& objects, double inlier_m = 0.05);
 
 /// Number of scene objects that `frames` detect (true class) in at least `min_frames` frames.
 int objectsDetectedInFrames(const ClutterScene& scene, const std::vector<SequenceFrame>& frames,
