@@ -133,7 +133,11 @@ void absorb(const ObjectTrack& dropped, ObjectTrack* kept) {
     const bool clash =
         std::any_of(kept->observations.begin(), kept->observations.end(),
                     [&](const TrackObservation& x) { return x.keyframe == o.keyframe; });
-    if (!clash) kept->observations.push_back(o);
+    // A measurement the depth refuted where it put the object (f_gc 0: far off along the ray,
+    // past the refinement's guard) does not move an object the depth supports (issue 45: on
+    // bench_rgb_01 such measurements dragged a sugar box onto its neighbour until they merged).
+    const bool refuted = o.consistency <= 0.0 && kept->best_consistency > 0.0;
+    if (!clash && !refuted) kept->observations.push_back(o);
   }
   std::sort(
       kept->observations.begin(), kept->observations.end(),
