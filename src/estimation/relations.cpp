@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace geofusion {
 
@@ -207,6 +208,18 @@ std::shared_ptr<ObjectModel> supportPlaneModel(const SupportPlane& plane,
   return model;
 }
 
+std::pair<double, double> hullHeightsAbove(const ObjectModel& model,
+                                           const Eigen::Isometry3d& T_map_obj,
+                                           const Eigen::Vector3d& normal, double height) {
+  double lowest = std::numeric_limits<double>::infinity(), highest = -lowest;
+  const TriangleMesh& hull = model.collision_hull.empty() ? model.mesh : model.collision_hull;
+  for (const Eigen::Vector3f& v : hull.vertices) {
+    const double h = normal.dot(T_map_obj * v.cast<double>()) - height;
+    lowest = std::min(lowest, h), highest = std::max(highest, h);
+  }
+  return {lowest, highest};
+}
+
 double depthThroughPlane(const SupportPlane& plane, const ObjectModel& model,
                          const Eigen::Isometry3d& T_map_obj, double margin_m) {
   if (!plane.valid) return 0.0;
@@ -215,11 +228,7 @@ double depthThroughPlane(const SupportPlane& plane, const ObjectModel& model,
   if (std::abs(in_plane.x()) > 0.5 * plane.size.x() + margin_m ||
       std::abs(in_plane.y()) > 0.5 * plane.size.y() + margin_m)
     return 0.0;
-  const TriangleMesh& hull = model.collision_hull.empty() ? model.mesh : model.collision_hull;
-  double lowest = 0.0;
-  for (const Eigen::Vector3f& v : hull.vertices)
-    lowest = std::min(lowest, plane.normal.dot(T_map_obj * v.cast<double>()) - plane.height);
-  return -lowest;
+  return std::max(0.0, -hullHeightsAbove(model, T_map_obj, plane.normal, plane.height).first);
 }
 
 std::vector<FeatureContact> inferRelations(const std::vector<PosedModel>& objects,

@@ -738,8 +738,9 @@ StageReport SceneEstimator::runRelationsAndStageTwo(const Keyframe* kf, StageTim
     tr.T_refined = poses[i];
     // Nothing stays in the table: an estimate through its top deeper than a contact can
     // resolve rests on it instead.
+    if (!config_.stage_two.lift_out_of_support) continue;
     const double depth = depthThroughPlane(support_, *tr.model, tr.T_refined);
-    if (config_.stage_two.lift_out_of_support && depth > config_.contacts.max_penetration_m)
+    if (depth > config_.contacts.max_penetration_m)
       tr.T_refined.translation() += depth * support_.normal;
   }
   // Candidates follow their stage I / initial pose.

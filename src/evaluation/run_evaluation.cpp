@@ -3,6 +3,7 @@
 #include "geofusion/evaluation/trajectory_metrics.h"
 
 #include "geofusion/common/atomic_file.h"
+#include "geofusion/estimation/relations.h"
 #include "geofusion/evaluation/evaluation.h"
 #include "geofusion/evaluation/metrics.h"
 #include "geofusion/simulation/clutter_scene.h"
@@ -69,13 +70,7 @@ struct Plane {
 // Heights of the object's lowest and highest hull vertices above the plane (negative: below).
 std::pair<double, double> heightsAbove(const ObjectModel& model, const Eigen::Isometry3d& T,
                                        const Plane& plane) {
-  double lowest = std::numeric_limits<double>::infinity(), highest = -lowest;
-  const TriangleMesh& mesh = model.collision_hull.empty() ? model.mesh : model.collision_hull;
-  for (const auto& v : mesh.vertices) {
-    const double h = plane.n.dot(T * v.cast<double>()) - plane.h;
-    lowest = std::min(lowest, h), highest = std::max(highest, h);
-  }
-  return {lowest, highest};
+  return hullHeightsAbove(model, T, plane.n, plane.h);
 }
 
 double lowestAbove(const ObjectModel& model, const Eigen::Isometry3d& T, const Plane& plane) {

@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 
 #include <memory>
+#include <utility>
 #include <vector>
 
 namespace geofusion {
@@ -65,6 +66,12 @@ void fuseSupportPlane(const SupportPlane& observed, SupportPlane* fused,
 std::shared_ptr<ObjectModel> supportPlaneModel(const SupportPlane& plane,
                                                Eigen::Isometry3d* T_map_model,
                                                double thickness_m = 0.03);
+
+/// Signed heights above a plane (unit normal, offset: n.x = height on it) of the lowest and the
+/// highest vertex of a posed model's collision hull (its mesh when it has none).
+std::pair<double, double> hullHeightsAbove(const ObjectModel& model,
+                                           const Eigen::Isometry3d& T_map_obj,
+                                           const Eigen::Vector3d& normal, double height);
 
 /// How far an object reaches through the plane, metres (0 when it does not): the depth of its
 /// collision hull's lowest vertex below the plane, for an object whose centre lies over the
