@@ -574,6 +574,14 @@ class Table {
          [f](GeoFusionConfig& c) { return &f(c)->restart_sigma_position_m; });
     real(p + "restart_sigma_rotation_rad", 0, 10, "... rad",
          [f](GeoFusionConfig& c) { return &f(c)->restart_sigma_rotation_rad; });
+    flag(p + "local_bundle_adjustment",
+         "at each keyframe, the window's poses and landmarks refined together (oldest fixed)",
+         [f](GeoFusionConfig& c) { return &f(c)->local_bundle_adjustment; });
+    integer(p + "ba_iterations", 1, 100, "solver iterations of each of its two passes",
+            [f](GeoFusionConfig& c) { return &f(c)->ba_iterations; });
+    real(p + "ba_depth_sigma_per_m2", 0, 1,
+         "a feature's depth noise in it: this times depth^2, m (0: depth unused)",
+         [f](GeoFusionConfig& c) { return &f(c)->ba_depth_sigma_per_m2; });
   }
   void node() {
     flag("node.publish_map_to_odom", "broadcast map -> odom at every keyframe",

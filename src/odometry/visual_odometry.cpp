@@ -1,6 +1,7 @@
 #include "geofusion/odometry/visual_odometry.h"
 
 #include "geofusion/common/ceres_compat.h"
+#include "geofusion/odometry/local_bundle_adjustment.h"
 
 #include <ceres/ceres.h>
 #include <mrpt/math/CQuaternion.h>
@@ -13,9 +14,12 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <cmath>
 #include <deque>
 #include <limits>
+#include <unordered_map>
 #include <vector>
 
 namespace geofusion {
@@ -114,11 +118,25 @@ struct ReprojectionCost {
   double fx_, fy_, cx_, cy_;
 };
 
+// A scene point of the local map, seen from one keyframe or more.
+struct VoLandmark {
+  Eigen::Vector3d X = Eigen::Vector3d::Zero();  ///< odom frame
+  cv::Mat descriptor;                           ///< of its newest observation
+};
+
+// A keyframe's feature seen as a landmark.
+struct VoObservation {
+  long landmark = -1;  ///< -1: dropped (an outlier of the bundle adjustment)
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();
+  double depth_m = 0.0;  ///< 0: none
+  int level = 0;
+};
+
 struct VoKeyframe {
   Eigen::Isometry3d T_odom_cam = Eigen::Isometry3d::Identity();
   Matrix6d covariance = Matrix6d::Zero();  ///< of T_odom_cam, MRPT order
-  std::vector<Eigen::Vector3d> points;     ///< odom frame, one per descriptor row
-  cv::Mat descriptors;
+  std::vector<VoObservation> observations;
+  cv::Mat descriptors;        ///< one row per observation
   int baseline_tracked = -1;  ///< inliers of the first frame tracked after it
 };
 
@@ -157,9 +175,13 @@ struct VisualOdometry::Impl {
   VisualOdometryConfig config;
   cv::Ptr<cv::ORB> orb;
   std::deque<VoKeyframe> keyframes;
-  // The local map: the last keyframes' points, rebuilt when a keyframe comes or goes.
+  std::unordered_map<long, VoLandmark> landmarks;
+  long next_landmark = 0;
+  // The local map: the landmarks the keyframes see, rebuilt when a keyframe comes or goes.
   std::vector<Eigen::Vector3d> map_points;
-  std::vector<int> map_keyframe;  ///< index into keyframes of each map point
+  std::vector<int> map_keyframe;  ///< index into keyframes of the newest one seeing each point
+  std::vector<long> map_landmark;
+  std::unordered_map<long, int> map_index;  ///< landmark -> map point
   cv::Mat map_descriptors;
 
   TrackingState state = TrackingState::kNotStarted;
@@ -172,22 +194,7 @@ struct VisualOdometry::Impl {
   Matrix6d anchor_cov = Matrix6d::Zero();
   Matrix6d last_cov = Matrix6d::Zero();  ///< MRPT order
 
-  void rebuildLocalMap() {
-    map_points.clear();
-    map_keyframe.clear();
-    std::vector<cv::Mat> rows;
-    for (std::size_t k = 0; k < keyframes.size(); ++k) {
-      const VoKeyframe& kf = keyframes[k];
-      map_points.insert(map_points.end(), kf.points.begin(), kf.points.end());
-      map_keyframe.insert(map_keyframe.end(), kf.points.size(), static_cast<int>(k));
-      rows.push_back(kf.descriptors);
-    }
-    if (rows.empty()) {
-      map_descriptors.release();
-    } else {
-      cv::vconcat(rows, map_descriptors);
-    }
-  }
+  void rebuildLocalMap();
 
   // The steps of track(), in their order.
   void detectSpreadFeatures(const cv::Mat& image, VoFrame* f) const;
@@ -207,28 +214,137 @@ struct VisualOdometry::Impl {
                               Matrix6d* cov_right) const;
   bool needsKeyframe(const Eigen::Isometry3d& T, int inliers);
 
-  void addKeyframe(const Eigen::Isometry3d& T, const Matrix6d& cov_mrpt,
-                   const std::vector<cv::KeyPoint>& kps, const cv::Mat& desc,
-                   const std::vector<Eigen::Vector3d>& pts_cam, const std::vector<char>& has3d) {
-    VoKeyframe kf;
-    kf.T_odom_cam = T;
-    kf.covariance = cov_mrpt;
-    kf.covariance.diagonal().array() += 1e-12;  // keep it positive definite
-    std::vector<int> rows;
-    for (std::size_t i = 0; i < kps.size(); ++i) {
-      if (!has3d[i]) continue;
-      kf.points.push_back(T * pts_cam[i]);
-      rows.push_back(static_cast<int>(i));
-    }
-    kf.descriptors = cv::Mat(static_cast<int>(rows.size()), desc.cols, desc.type());
-    for (std::size_t r = 0; r < rows.size(); ++r)
-      desc.row(rows[r]).copyTo(kf.descriptors.row(static_cast<int>(r)));
-    keyframes.push_back(std::move(kf));
-    while (static_cast<int>(keyframes.size()) > std::max(1, config.local_keyframes))
-      keyframes.pop_front();
-    rebuildLocalMap();
-  }
+  void addKeyframe(const Eigen::Isometry3d& T, const Matrix6d& cov_mrpt, const VoFrame& f,
+                   const std::vector<int>& match_map, const PinholeIntrinsics& K);
+  void adjustLocalMap(const PinholeIntrinsics& K);
 };
+
+// The local map: every landmark the window's keyframes see, once, with the newest keyframe that
+// sees it; landmarks no keyframe sees any more are forgotten.
+void VisualOdometry::Impl::rebuildLocalMap() {
+  map_points.clear();
+  map_keyframe.clear();
+  map_landmark.clear();
+  map_index.clear();
+  for (std::size_t k = keyframes.size(); k-- > 0;) {
+    for (const VoObservation& o : keyframes[k].observations) {
+      if (o.landmark < 0 || map_index.count(o.landmark)) continue;
+      map_index[o.landmark] = static_cast<int>(map_points.size());
+      map_points.push_back(landmarks.at(o.landmark).X);
+      map_keyframe.push_back(static_cast<int>(k));
+      map_landmark.push_back(o.landmark);
+    }
+  }
+  for (auto it = landmarks.begin(); it != landmarks.end();)
+    it = map_index.count(it->first) ? std::next(it) : landmarks.erase(it);
+  if (map_points.empty()) {
+    map_descriptors.release();
+    return;
+  }
+  const cv::Mat& first = landmarks.at(map_landmark.front()).descriptor;
+  map_descriptors.create(static_cast<int>(map_points.size()), first.cols, first.type());
+  for (std::size_t m = 0; m < map_landmark.size(); ++m)
+    landmarks.at(map_landmark[m]).descriptor.copyTo(map_descriptors.row(static_cast<int>(m)));
+}
+
+// A new keyframe at T: the features matched to map points consistently with T (within the RANSAC
+// threshold) become observations of those landmarks, the other features with depth new
+// landmarks; the oldest keyframe beyond the window leaves, and the window is bundle-adjusted.
+void VisualOdometry::Impl::addKeyframe(const Eigen::Isometry3d& T, const Matrix6d& cov_mrpt,
+                                       const VoFrame& f, const std::vector<int>& match_map,
+                                       const PinholeIntrinsics& K) {
+  VoKeyframe kf;
+  kf.T_odom_cam = T;
+  kf.covariance = cov_mrpt;
+  kf.covariance.diagonal().array() += 1e-12;  // keep it positive definite
+  const Eigen::Isometry3d T_cam_odom = T.inverse();
+  const double thr2 = config.ransac_reprojection_px * config.ransac_reprojection_px;
+  std::vector<int> rows;
+  std::unordered_map<long, char> seen;
+  for (std::size_t i = 0; i < f.kps.size(); ++i) {
+    const Eigen::Vector2d uv(f.kps[i].pt.x, f.kps[i].pt.y);
+    VoObservation o{-1, uv, f.has3d[i] ? f.pts_cam[i].z() : 0.0, f.kps[i].octave};
+    const int m = match_map.empty() ? -1 : match_map[i];
+    if (m >= 0) {
+      const Eigen::Vector3d p = T_cam_odom * map_points[static_cast<std::size_t>(m)];
+      const long id = map_landmark[static_cast<std::size_t>(m)];
+      if (p.z() > 0.05 && (K.project(p) - uv).squaredNorm() <= thr2 && !seen.count(id)) {
+        o.landmark = id;
+        f.desc.row(static_cast<int>(i)).copyTo(landmarks.at(id).descriptor);
+      }
+    }
+    if (o.landmark < 0 && f.has3d[i]) {
+      o.landmark = next_landmark++;
+      VoLandmark& l = landmarks[o.landmark];
+      l.X = T * f.pts_cam[i];
+      f.desc.row(static_cast<int>(i)).copyTo(l.descriptor);
+    }
+    if (o.landmark < 0) continue;
+    seen[o.landmark] = 1;
+    kf.observations.push_back(o);
+    rows.push_back(static_cast<int>(i));
+  }
+  kf.descriptors = cv::Mat(static_cast<int>(rows.size()), f.desc.cols, f.desc.type());
+  for (std::size_t r = 0; r < rows.size(); ++r)
+    f.desc.row(rows[r]).copyTo(kf.descriptors.row(static_cast<int>(r)));
+  keyframes.push_back(std::move(kf));
+  while (static_cast<int>(keyframes.size()) > std::max(1, config.local_keyframes))
+    keyframes.pop_front();
+  if (config.local_bundle_adjustment && keyframes.size() >= 2) adjustLocalMap(K);
+  rebuildLocalMap();
+}
+
+// Local bundle adjustment of the window (the oldest keyframe fixed): poses and the landmarks seen
+// from two keyframes or more; outlier observations dropped; the motion model moved with the
+// newest keyframe (the current frame).
+void VisualOdometry::Impl::adjustLocalMap(const PinholeIntrinsics& K) {
+  std::unordered_map<long, int> count, point_of;
+  for (const VoKeyframe& kf : keyframes)
+    for (const VoObservation& o : kf.observations)
+      if (o.landmark >= 0) ++count[o.landmark];
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<char> fixed;
+  std::vector<Eigen::Vector3d> points;
+  std::vector<long> point_landmark;
+  std::vector<BundleObservation> observations;
+  std::vector<std::pair<std::size_t, std::size_t>> source;  ///< keyframe, observation
+  for (std::size_t k = 0; k < keyframes.size(); ++k) {
+    poses.push_back(keyframes[k].T_odom_cam);
+    fixed.push_back(k == 0);
+    for (std::size_t j = 0; j < keyframes[k].observations.size(); ++j) {
+      const VoObservation& o = keyframes[k].observations[j];
+      if (o.landmark < 0 || count[o.landmark] < 2) continue;
+      auto [it, added] = point_of.emplace(o.landmark, static_cast<int>(points.size()));
+      if (added) {
+        points.push_back(landmarks.at(o.landmark).X);
+        point_landmark.push_back(o.landmark);
+      }
+      observations.push_back({static_cast<int>(k), it->second, o.uv, o.depth_m, o.level});
+      source.emplace_back(k, j);
+    }
+  }
+  LocalBundleAdjustmentOptions options;
+  options.pixel_sigma = config.pixel_sigma;
+  options.scale_factor = config.scale_factor;
+  options.depth_sigma_per_m2 = config.ba_depth_sigma_per_m2;
+  options.iterations = config.ba_iterations;
+  std::vector<char> outlier;
+  const BundleAdjustmentResult r =
+      localBundleAdjustment(K, options, observations, fixed, &poses, &points, &outlier);
+  if (!r.solved) return;  // the window keeps its poses: tracking goes on as without it
+  const Eigen::Isometry3d correction = poses.back() * keyframes.back().T_odom_cam.inverse();
+  if (std::getenv("GEOFUSION_VO_DEBUG"))
+    std::fprintf(stderr, "BA kf %zu obs %d pts %zu out %d cost %.1f -> %.1f corr %.2f cm %.3f deg\n",
+                 keyframes.size(), r.observations, points.size(), r.outliers, r.initial_cost,
+                 r.final_cost, 100 * correction.translation().norm(),
+                 rotationAngle(correction) * 180 / M_PI);
+  for (std::size_t k = 0; k < keyframes.size(); ++k) keyframes[k].T_odom_cam = poses[k];
+  for (std::size_t p = 0; p < points.size(); ++p) landmarks.at(point_landmark[p]).X = points[p];
+  for (std::size_t i = 0; i < observations.size(); ++i)
+    if (outlier[i]) keyframes[source[i].first].observations[source[i].second].landmark = -1;
+  T_last = keyframes.back().T_odom_cam;
+  T_prev = correction * T_prev;
+}
 
 VisualOdometry::VisualOdometry(const VisualOdometryConfig& config)
     : impl_(std::make_unique<Impl>()) {
@@ -251,6 +367,7 @@ int VisualOdometry::numKeyframes() const {
 void VisualOdometry::reset(const Eigen::Isometry3d& T_odom_cam) {
   Impl& s = *impl_;
   s.keyframes.clear();
+  s.landmarks.clear();
   s.rebuildLocalMap();
   s.state = TrackingState::kNotStarted;
   s.lost_frames = 0;
@@ -329,6 +446,7 @@ void VisualOdometry::Impl::fail(const std::string& why, VoFrameResult* out) {
   if (state == TrackingState::kLost && ++lost_frames >= config.relocalise_frames &&
       !keyframes.empty()) {
     keyframes.clear();
+    landmarks.clear();
     rebuildLocalMap();
     T_anchor = T_last;
     anchor_cov = last_cov;
@@ -344,7 +462,7 @@ void VisualOdometry::Impl::fail(const std::string& why, VoFrameResult* out) {
 
 // No map: the first keyframe of a new one, at the anchor.
 void VisualOdometry::Impl::startMap(const VoFrame& f, double stamp_s, VoFrameResult* out) {
-  addKeyframe(T_anchor, anchor_cov, f.kps, f.desc, f.pts_cam, f.has3d);
+  addKeyframe(T_anchor, anchor_cov, f, {}, PinholeIntrinsics());
   out->restarted = true;
   out->keyframe = true;
   out->pose_valid = true;
@@ -407,28 +525,27 @@ std::vector<int> VisualOdometry::Impl::matchGuided(const VoFrame& f, const Pinho
   return match_map;
 }
 
-// Relocalisation: descriptors alone, against one keyframe at a time (the local map holds each
-// scene point once per keyframe, which would defeat the ratio test), newest first; the keyframe
-// with the most matches wins.
+// Relocalisation: descriptors alone, against one keyframe at a time (its own features, a view
+// of the scene the frame may share), newest first; the keyframe with the most matches wins.
 std::vector<int> VisualOdometry::Impl::matchByDescriptor(const VoFrame& f) const {
   std::vector<int> match_map(f.kps.size(), -1);
   cv::BFMatcher matcher(cv::NORM_HAMMING);
-  std::size_t offset = map_points.size();
   for (std::size_t k = keyframes.size(); k-- > 0;) {
     const VoKeyframe& kf = keyframes[k];
-    offset -= kf.points.size();
     if (kf.descriptors.empty()) continue;
     std::vector<std::vector<cv::DMatch>> knn;
     matcher.knnMatch(f.desc, kf.descriptors, knn, 2);
     std::vector<int> candidate(f.kps.size(), -1);
-    std::vector<char> taken(kf.points.size(), 0);
+    std::vector<char> taken(kf.observations.size(), 0);
     int n = 0;
     for (const auto& m : knn) {
       if (m.empty() || m[0].distance > config.max_descriptor_distance) continue;
       if (m.size() > 1 && m[0].distance > 0.8 * m[1].distance) continue;
-      if (taken[static_cast<std::size_t>(m[0].trainIdx)]) continue;
-      taken[static_cast<std::size_t>(m[0].trainIdx)] = 1;
-      candidate[static_cast<std::size_t>(m[0].queryIdx)] = static_cast<int>(offset) + m[0].trainIdx;
+      const std::size_t train = static_cast<std::size_t>(m[0].trainIdx);
+      const long id = kf.observations[train].landmark;
+      if (taken[train] || id < 0) continue;
+      taken[train] = 1;
+      candidate[static_cast<std::size_t>(m[0].queryIdx)] = map_index.at(id);
       ++n;
     }
     if (n > matchCount(match_map)) match_map = candidate;
@@ -682,7 +799,8 @@ VoFrameResult VisualOdometry::track(const GrayImageView& gray, const DepthImageV
   s.have_velocity = !lost;
   s.last_stamp = stamp_s;
   if (s.needsKeyframe(T, out.inliers)) {
-    s.addKeyframe(T, s.last_cov, f.kps, f.desc, f.pts_cam, f.has3d);
+    s.addKeyframe(T, s.last_cov, f, match_map, K);
+    out.T_odom_cam = s.T_last;  // the bundle adjustment's pose of this frame
     out.keyframe = true;
   }
   return finish();

@@ -4,8 +4,10 @@
 // frame, lost frames. Writes both trajectories in TUM format and the figures as JSON.
 //
 //   vo_benchmark --bag FILE.bag --ground-truth FILE_gt.yaml [--out-dir DIR] [--threads N]
-//       [--rgb-topic T] [--depth-topic T] [--camera-info-topic T] [--quiet]
+//       [--params FILE] [--set visual_odometry.KEY=VALUE]... [--rgb-topic T] [--depth-topic T]
+//       [--camera-info-topic T] [--quiet]
 #include "command_line.h"
+#include "config_option.h"
 #include "geofusion/common/robot_names.h"
 #include "geofusion/common/statistics.h"
 #include "geofusion/evaluation/trajectory_metrics.h"
@@ -40,11 +42,13 @@ struct Options {
   std::string info_topic = std::string("/") + geofusion::kCameraInfoTopic;
   int threads = 1;
   bool quiet = false;
+  geofusion::ConfigOptions config;  ///< --params, --set: the visual odometry's settings
 };
 
 void usage() {
   std::cerr << "usage: vo_benchmark --bag FILE.bag --ground-truth FILE_gt.yaml [--out-dir DIR]\n"
-               "         [--threads N=1] [--rgb-topic T] [--depth-topic T]\n"
+               "         [--threads N=1] [--params FILE] [--set visual_odometry.KEY=VALUE]...\n"
+               "         [--rgb-topic T] [--depth-topic T]\n"
                "         [--camera-info-topic T] [--quiet]\n";
 }
 
@@ -59,6 +63,7 @@ Options parse(int argc, char** argv) {
   args.value("--depth-topic", &o.depth_topic);
   args.value("--camera-info-topic", &o.info_topic);
   args.toggle("--quiet", &o.quiet);
+  o.config.declare(&args);
   args.parse(argc, argv, usage);
   if (o.bag.empty() || o.ground_truth.empty())
     throw std::runtime_error("--bag and --ground-truth are required");
@@ -74,6 +79,7 @@ struct Pending {
 
 /// The odometry over the recording: the poses it tracked and its figures.
 struct VoRun {
+  explicit VoRun(const geofusion::VisualOdometryConfig& config) : vo(config) {}
   geofusion::VisualOdometry vo;
   std::vector<std::uint8_t> gray;  ///< the images converted, reused frame to frame
   std::vector<float> depth;
@@ -144,7 +150,8 @@ void runOdometry(const Options& opt, const rosbag::Bag& bag, VoRun* run, std::st
   }
 }
 
-nlohmann::json resultsJson(const Options& opt, const geofusion::GroundTruth& gt, const VoRun& run,
+nlohmann::json resultsJson(const Options& opt, const geofusion::GeoFusionConfig& config,
+                           const geofusion::GroundTruth& gt, const VoRun& run,
                            const geofusion::TrajectoryErrors& e) {
   using namespace geofusion;
   nlohmann::json j;
@@ -170,6 +177,8 @@ nlohmann::json resultsJson(const Options& opt, const geofusion::GroundTruth& gt,
   j["time_ms_p95"] = percentile(run.times, 0.95);
   j["time_ms_max"] = percentile(run.times, 1.0);
   j["opencv_threads"] = opt.threads;
+  j["config"] = configYaml(config, false, false, {"visual_odometry"});
+  j["config_changed"] = configDiff(config);
   return j;
 }
 
@@ -195,6 +204,8 @@ int main(int argc, char** argv) {
   if (!geofusion::readCommandLine("vo_benchmark", usage, [&] { opt = parse(argc, argv); }))
     return 2;
   cv::setNumThreads(opt.threads);
+  GeoFusionConfig config;
+  if (!opt.config.apply("vo_benchmark", &config)) return 2;
   GroundTruth gt;
   std::string error;
   // Only the camera trajectory is used, but reading the file resolves its classes: the model
@@ -212,7 +223,7 @@ int main(int argc, char** argv) {
     std::cerr << "vo_benchmark: cannot read " << opt.bag << ": " << e.what() << "\n";
     return 1;
   }
-  VoRun run;
+  VoRun run(config.visual_odometry);
   runOdometry(opt, bag, &run, &error);
   std::vector<double> true_stamps;
   std::vector<Eigen::Isometry3d> truth;
@@ -229,7 +240,7 @@ int main(int argc, char** argv) {
     std::cerr << "vo_benchmark: " << error << "\n";
     return 1;
   }
-  std::ofstream(stem + "_vo.json") << resultsJson(opt, gt, run, e).dump(2) << "\n";
+  std::ofstream(stem + "_vo.json") << resultsJson(opt, config, gt, run, e).dump(2) << "\n";
   printSummary(opt, gt, run, e, stem);
   return 0;
 }

@@ -1,5 +1,6 @@
 // ORB-style RGB-D visual odometry: ORB features (OpenCV) back-projected with the registered depth,
-// tracked frame to local map (the last few keyframes' points) by projection with a
+// tracked frame to local map (the landmarks of the last few keyframes, bundle-adjusted with
+// their poses at each new keyframe) by projection with a
 // constant-velocity prediction, the pose from PnP with RANSAC (OpenCV) refined by a robust
 // (Huber) reprojection fit in Ceres, keyframes inserted when the tracked share of the reference
 // keyframe falls or the camera has moved enough. Lost tracking (too few features with depth, too
@@ -28,7 +29,7 @@ struct VisualOdometryConfig {
   int fast_threshold = 12;    ///< FAST corner threshold (grey levels)
   double min_depth_m = 0.25;  ///< features with depth outside [min, max] get no 3D point
   double max_depth_m = 4.0;
-  int local_keyframes = 5;           ///< keyframes whose points make the local map
+  int local_keyframes = 5;           ///< keyframes whose landmarks make the local map
   double match_radius_px = 15.0;     ///< guided matching window about the predicted projection
   int max_descriptor_distance = 64;  ///< Hamming, of 256 bits
   double ratio = 0.9;                ///< best / second best descriptor distance, at most
@@ -46,6 +47,12 @@ struct VisualOdometryConfig {
   int relocalise_frames = 15;             ///< lost this many frames in a row: restart the map
   double restart_sigma_position_m = 0.3;  ///< covariance added at a restart (documented jump)
   double restart_sigma_rotation_rad = 0.3;
+  /// At each new keyframe, the window's keyframe poses and landmarks refined together (local
+  /// bundle adjustment, the oldest keyframe fixed; odometry/local_bundle_adjustment.h).
+  bool local_bundle_adjustment = true;
+  int ba_iterations = 5;  ///< solver iterations of each of its two passes
+  /// Depth noise of a feature at depth z in the adjustment: this times z^2 (m; 0: depth unused).
+  double ba_depth_sigma_per_m2 = 0.005;
 };
 
 enum class TrackingState { kNotStarted, kTracking, kLost };
