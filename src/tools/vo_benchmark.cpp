@@ -4,8 +4,8 @@
 // frame, lost frames. Writes both trajectories in TUM format and the figures as JSON.
 //
 //   vo_benchmark --bag FILE.bag --ground-truth FILE_gt.yaml [--out-dir DIR] [--threads N]
-//       [--params FILE] [--set visual_odometry.KEY=VALUE]... [--rgb-topic T] [--depth-topic T]
-//       [--camera-info-topic T] [--quiet]
+//       [--params FILE] [--set visual_odometry.KEY=VALUE]... [--first-frame K] [--frame-step N]
+//       [--rgb-topic T] [--depth-topic T] [--camera-info-topic T] [--quiet]
 #include "command_line.h"
 #include "config_option.h"
 #include "geofusion/common/robot_names.h"
@@ -41,6 +41,8 @@ struct Options {
   std::string depth_topic = std::string("/") + geofusion::kDepthTopic;
   std::string info_topic = std::string("/") + geofusion::kCameraInfoTopic;
   int threads = 1;
+  int first_frame = 0;  ///< image sets before this one are skipped
+  int frame_step = 1;   ///< ... and then all but every N-th (a slower camera)
   bool quiet = false;
   geofusion::ConfigOptions config;  ///< --params, --set: the visual odometry's settings
 };
@@ -48,6 +50,7 @@ struct Options {
 void usage() {
   std::cerr << "usage: vo_benchmark --bag FILE.bag --ground-truth FILE_gt.yaml [--out-dir DIR]\n"
                "         [--threads N=1] [--params FILE] [--set visual_odometry.KEY=VALUE]...\n"
+               "         [--first-frame K=0] [--frame-step N=1]\n"
                "         [--rgb-topic T] [--depth-topic T]\n"
                "         [--camera-info-topic T] [--quiet]\n";
 }
@@ -59,6 +62,8 @@ Options parse(int argc, char** argv) {
   args.value("--ground-truth", &o.ground_truth);
   args.value("--out-dir", &o.out_dir);
   args.value("--threads", &o.threads);
+  args.value("--first-frame", &o.first_frame);
+  args.value("--frame-step", &o.frame_step);
   args.value("--rgb-topic", &o.rgb_topic);
   args.value("--depth-topic", &o.depth_topic);
   args.value("--camera-info-topic", &o.info_topic);
@@ -68,6 +73,8 @@ Options parse(int argc, char** argv) {
   if (o.bag.empty() || o.ground_truth.empty())
     throw std::runtime_error("--bag and --ground-truth are required");
   if (o.threads < 1) throw std::runtime_error("--threads must be at least 1");
+  if (o.first_frame < 0) throw std::runtime_error("--first-frame must not be negative");
+  if (o.frame_step < 1) throw std::runtime_error("--frame-step must be at least 1");
   return o;
 }
 
@@ -127,6 +134,7 @@ void trackFrame(const Options& opt, const Pending& set, VoRun* run, std::string*
 // The recording's images and camera info, made into sets by their stamps, through the odometry.
 void runOdometry(const Options& opt, const rosbag::Bag& bag, VoRun* run, std::string* error) {
   std::map<uint64_t, Pending> pending;
+  int index = 0;  // of the image set in the recording
   rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{opt.rgb_topic, opt.depth_topic,
                                                                      opt.info_topic}));
   for (const rosbag::MessageInstance& m : view) {
@@ -146,6 +154,8 @@ void runOdometry(const Options& opt, const rosbag::Bag& bag, VoRun* run, std::st
     if (!p.rgb || !p.depth || !p.info) continue;
     const Pending set = p;
     pending.erase(pending.begin(), pending.upper_bound(stamp));
+    const int i = index++;
+    if (i < opt.first_frame || (i - opt.first_frame) % opt.frame_step != 0) continue;
     trackFrame(opt, set, run, error);
   }
 }
@@ -177,6 +187,8 @@ nlohmann::json resultsJson(const Options& opt, const geofusion::GeoFusionConfig&
   j["time_ms_p95"] = percentile(run.times, 0.95);
   j["time_ms_max"] = percentile(run.times, 1.0);
   j["opencv_threads"] = opt.threads;
+  j["first_frame"] = opt.first_frame;
+  j["frame_step"] = opt.frame_step;
   j["config"] = configYaml(config, false, false, {"visual_odometry"});
   j["config_changed"] = configDiff(config);
   return j;
