@@ -17,8 +17,15 @@ template <bool kDepth>
 struct ObservationCost {
   ObservationCost(const BundleObservation& o, const PinholeIntrinsics& K, double sigma_px,
                   double sigma_z)
-      : u(o.uv.x()), v(o.uv.y()), z(o.depth_m), fx(K.fx), fy(K.fy), cx(K.cx), cy(K.cy),
-        inv_px(1.0 / sigma_px), inv_z(sigma_z > 0 ? 1.0 / sigma_z : 0.0) {}
+      : u(o.uv.x()),
+        v(o.uv.y()),
+        z(o.depth_m),
+        fx(K.fx),
+        fy(K.fy),
+        cx(K.cx),
+        cy(K.cy),
+        inv_px(1.0 / sigma_px),
+        inv_z(sigma_z > 0 ? 1.0 / sigma_z : 0.0) {}
   template <typename T>
   bool operator()(const T* q_cam_odom, const T* t_cam_odom, const T* X, T* r) const {
     const Eigen::Map<const Eigen::Quaternion<T>> q(q_cam_odom);
@@ -44,8 +51,8 @@ bool usesDepth(const BundleObservation& o, const LocalBundleAdjustmentOptions& o
 }
 
 // The normalised squared error of an observation at the current estimate.
-double chi2(const BundleObservation& o, const PinholeIntrinsics& K, double sigma_px,
-            double sigma_z, const PoseBlock& pose, const Eigen::Vector3d& X, bool depth) {
+double chi2(const BundleObservation& o, const PinholeIntrinsics& K, double sigma_px, double sigma_z,
+            const PoseBlock& pose, const Eigen::Vector3d& X, bool depth) {
   const Eigen::Vector3d p = pose.q * X + pose.t;
   if (p.z() < 1e-3) return std::numeric_limits<double>::infinity();
   double e = (K.project(p) - o.uv).squaredNorm() / (sigma_px * sigma_px);
@@ -142,9 +149,9 @@ BundleAdjustmentResult localBundleAdjustment(const PinholeIntrinsics& K,
       for (std::size_t i = 0; i < observations.size(); ++i) {
         const BundleObservation& o = observations[i];
         if (seen[static_cast<std::size_t>(o.point)] < 2) continue;
-        const double e = chi2(o, K, sigma_px[i], sigma_z[i],
-                              poses[static_cast<std::size_t>(o.keyframe)],
-                              X[static_cast<std::size_t>(o.point)], depth[i]);
+        const double e =
+            chi2(o, K, sigma_px[i], sigma_z[i], poses[static_cast<std::size_t>(o.keyframe)],
+                 X[static_cast<std::size_t>(o.point)], depth[i]);
         if (e > (depth[i] ? options.chi2_3d : options.chi2_2d)) {
           (*outlier)[i] = 1;
           ++result.outliers;

@@ -14,8 +14,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
-#include <cstdlib>
 #include <cmath>
 #include <deque>
 #include <limits>
@@ -121,7 +119,6 @@ struct ReprojectionCost {
 // A scene point of the local map, seen from one keyframe or more.
 struct VoLandmark {
   Eigen::Vector3d X = Eigen::Vector3d::Zero();  ///< odom frame
-  cv::Mat descriptor;                           ///< of its newest observation
 };
 
 // A keyframe's feature seen as a landmark.
@@ -177,11 +174,12 @@ struct VisualOdometry::Impl {
   std::deque<VoKeyframe> keyframes;
   std::unordered_map<long, VoLandmark> landmarks;
   long next_landmark = 0;
-  // The local map: the landmarks the keyframes see, rebuilt when a keyframe comes or goes.
+  // The local map: one row per keyframe observation (a landmark seen from several keyframes has
+  // a row, and a descriptor, from each), rebuilt when a keyframe comes or goes.
   std::vector<Eigen::Vector3d> map_points;
-  std::vector<int> map_keyframe;  ///< index into keyframes of the newest one seeing each point
-  std::vector<long> map_landmark;
-  std::unordered_map<long, int> map_index;  ///< landmark -> map point
+  std::vector<int> map_keyframe;   ///< index into keyframes of each row
+  std::vector<long> map_landmark;  ///< -1: a dropped observation (never matched)
+  std::vector<int> keyframe_row;   ///< the first row of each keyframe
   cv::Mat map_descriptors;
 
   TrackingState state = TrackingState::kNotStarted;
@@ -219,32 +217,33 @@ struct VisualOdometry::Impl {
   void adjustLocalMap(const PinholeIntrinsics& K);
 };
 
-// The local map: every landmark the window's keyframes see, once, with the newest keyframe that
-// sees it; landmarks no keyframe sees any more are forgotten.
+// The local map: every observation of the window's keyframes, at its landmark's position, with
+// the keyframe's descriptor (each view of a scene point can be matched); landmarks no keyframe
+// sees any more are forgotten.
 void VisualOdometry::Impl::rebuildLocalMap() {
   map_points.clear();
   map_keyframe.clear();
   map_landmark.clear();
-  map_index.clear();
-  for (std::size_t k = keyframes.size(); k-- > 0;) {
+  keyframe_row.clear();
+  std::unordered_map<long, char> seen;
+  std::vector<cv::Mat> rows;
+  for (std::size_t k = 0; k < keyframes.size(); ++k) {
+    keyframe_row.push_back(static_cast<int>(map_points.size()));
     for (const VoObservation& o : keyframes[k].observations) {
-      if (o.landmark < 0 || map_index.count(o.landmark)) continue;
-      map_index[o.landmark] = static_cast<int>(map_points.size());
-      map_points.push_back(landmarks.at(o.landmark).X);
+      map_points.push_back(o.landmark < 0 ? Eigen::Vector3d::Zero() : landmarks.at(o.landmark).X);
       map_keyframe.push_back(static_cast<int>(k));
       map_landmark.push_back(o.landmark);
+      seen[o.landmark] = 1;
     }
+    rows.push_back(keyframes[k].descriptors);
   }
   for (auto it = landmarks.begin(); it != landmarks.end();)
-    it = map_index.count(it->first) ? std::next(it) : landmarks.erase(it);
+    it = seen.count(it->first) ? std::next(it) : landmarks.erase(it);
   if (map_points.empty()) {
     map_descriptors.release();
-    return;
+  } else {
+    cv::vconcat(rows, map_descriptors);
   }
-  const cv::Mat& first = landmarks.at(map_landmark.front()).descriptor;
-  map_descriptors.create(static_cast<int>(map_points.size()), first.cols, first.type());
-  for (std::size_t m = 0; m < map_landmark.size(); ++m)
-    landmarks.at(map_landmark[m]).descriptor.copyTo(map_descriptors.row(static_cast<int>(m)));
 }
 
 // A new keyframe at T: the features matched to map points consistently with T (within the RANSAC
@@ -268,16 +267,12 @@ void VisualOdometry::Impl::addKeyframe(const Eigen::Isometry3d& T, const Matrix6
     if (m >= 0) {
       const Eigen::Vector3d p = T_cam_odom * map_points[static_cast<std::size_t>(m)];
       const long id = map_landmark[static_cast<std::size_t>(m)];
-      if (p.z() > 0.05 && (K.project(p) - uv).squaredNorm() <= thr2 && !seen.count(id)) {
+      if (id >= 0 && p.z() > 0.05 && (K.project(p) - uv).squaredNorm() <= thr2 && !seen.count(id))
         o.landmark = id;
-        f.desc.row(static_cast<int>(i)).copyTo(landmarks.at(id).descriptor);
-      }
     }
     if (o.landmark < 0 && f.has3d[i]) {
       o.landmark = next_landmark++;
-      VoLandmark& l = landmarks[o.landmark];
-      l.X = T * f.pts_cam[i];
-      f.desc.row(static_cast<int>(i)).copyTo(l.descriptor);
+      landmarks[o.landmark].X = T * f.pts_cam[i];
     }
     if (o.landmark < 0) continue;
     seen[o.landmark] = 1;
@@ -333,11 +328,6 @@ void VisualOdometry::Impl::adjustLocalMap(const PinholeIntrinsics& K) {
       localBundleAdjustment(K, options, observations, fixed, &poses, &points, &outlier);
   if (!r.solved) return;  // the window keeps its poses: tracking goes on as without it
   const Eigen::Isometry3d correction = poses.back() * keyframes.back().T_odom_cam.inverse();
-  if (std::getenv("GEOFUSION_VO_DEBUG"))
-    std::fprintf(stderr, "BA kf %zu obs %d pts %zu out %d cost %.1f -> %.1f corr %.2f cm %.3f deg\n",
-                 keyframes.size(), r.observations, points.size(), r.outliers, r.initial_cost,
-                 r.final_cost, 100 * correction.translation().norm(),
-                 rotationAngle(correction) * 180 / M_PI);
   for (std::size_t k = 0; k < keyframes.size(); ++k) keyframes[k].T_odom_cam = poses[k];
   for (std::size_t p = 0; p < points.size(); ++p) landmarks.at(point_landmark[p]).X = points[p];
   for (std::size_t i = 0; i < observations.size(); ++i)
@@ -494,6 +484,7 @@ std::vector<int> VisualOdometry::Impl::matchGuided(const VoFrame& f, const Pinho
   const Eigen::Isometry3d T_cam_odom = T_pred.inverse();
   const int r_cells = static_cast<int>(std::ceil(radius / cell));
   for (std::size_t m = 0; m < map_points.size(); ++m) {
+    if (map_landmark[m] < 0) continue;  // dropped by the bundle adjustment
     const Eigen::Vector3d p = T_cam_odom * map_points[m];
     if (p.z() < 0.1) continue;
     const Eigen::Vector2d uv = K.project(p);
@@ -545,7 +536,7 @@ std::vector<int> VisualOdometry::Impl::matchByDescriptor(const VoFrame& f) const
       const long id = kf.observations[train].landmark;
       if (taken[train] || id < 0) continue;
       taken[train] = 1;
-      candidate[static_cast<std::size_t>(m[0].queryIdx)] = map_index.at(id);
+      candidate[static_cast<std::size_t>(m[0].queryIdx)] = keyframe_row[k] + m[0].trainIdx;
       ++n;
     }
     if (n > matchCount(match_map)) match_map = candidate;

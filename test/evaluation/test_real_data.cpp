@@ -320,9 +320,10 @@ TEST(Real7Scenes, VisualOdometryTracksEveryFrame) {
       seq.frames.size(), lost, 100.0 * e.ate_rmse_m, e.length_m, median(times));
   EXPECT_EQ(lost, 0);
   EXPECT_GT(e.length_m, 1.5);
-  // Measured 2.84 cm (docs/visual_odometry.md, "Real frames"); the bound leaves room for a
-  // different OpenCV build's features, not for a regression of a centimetre.
-  EXPECT_LT(e.ate_rmse_m, 0.032);
+  // Measured 1.88 cm (2.84 before keyframes shared landmarks; docs/visual_odometry.md, "Real
+  // frames"); the same frames from later or at 15 Hz give 2.07-2.37 cm. The bound leaves room for
+  // a different OpenCV build's features, not for the regression back to 2.84 cm.
+  EXPECT_LT(e.ate_rmse_m, 0.026);
 }
 
 }  // namespace

@@ -55,8 +55,9 @@ Window makeWindow(unsigned seed, double noise = 1.0) {
   for (int k = 1; k < 5; ++k) {
     Eigen::Isometry3d D = Eigen::Isometry3d::Identity();
     D.translation() = 0.02 * Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
-    D.linear() = Eigen::AngleAxisd(M_PI / 180.0, Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized())
-                     .toRotationMatrix();
+    D.linear() =
+        Eigen::AngleAxisd(M_PI / 180.0, Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized())
+            .toRotationMatrix();
     w.poses[k] = w.truth[k] * D;
   }
   for (const Eigen::Vector3d& X : w.true_points)
@@ -120,8 +121,8 @@ TEST(LocalBundleAdjustment, ReportsBadInputAndChangesNothing) {
   const std::vector<Eigen::Isometry3d> poses = w.poses;
   std::vector<char> outlier;
   // A fixed flag missing.
-  BundleAdjustmentResult r = localBundleAdjustment(w.K, {}, w.observations, {1, 0}, &w.poses,
-                                                   &w.points, &outlier);
+  BundleAdjustmentResult r =
+      localBundleAdjustment(w.K, {}, w.observations, {1, 0}, &w.poses, &w.points, &outlier);
   EXPECT_FALSE(r.solved);
   EXPECT_FALSE(r.problem.empty());
   // An observation of a point that does not exist.

@@ -41,11 +41,11 @@ struct BundleObservation {
 
 struct BundleAdjustmentResult {
   bool solved = false;
-  std::string problem;       ///< why not (empty when solved)
-  int observations = 0;      ///< residual blocks of the first pass
-  int outliers = 0;          ///< observations dropped after the first pass
-  double initial_cost = 0.0; ///< of the first pass
-  double final_cost = 0.0;   ///< of the second
+  std::string problem;        ///< why not (empty when solved)
+  int observations = 0;       ///< residual blocks of the first pass
+  int outliers = 0;           ///< observations dropped after the first pass
+  double initial_cost = 0.0;  ///< of the first pass
+  double final_cost = 0.0;    ///< of the second
 };
 
 /// Refines `T_odom_cam` (keyframe poses, those with `fixed` true held) and `points` (odom frame)

@@ -1,6 +1,7 @@
 // ORB-style RGB-D visual odometry: ORB features (OpenCV) back-projected with the registered depth,
-// tracked frame to local map (the landmarks of the last few keyframes, bundle-adjusted with
-// their poses at each new keyframe) by projection with a
+// tracked frame to local map (the landmarks of the last few keyframes: a feature tracked when a
+// keyframe is made keeps its landmark's position; optionally bundle-adjusted with the keyframe
+// poses) by projection with a
 // constant-velocity prediction, the pose from PnP with RANSAC (OpenCV) refined by a robust
 // (Huber) reprojection fit in Ceres, keyframes inserted when the tracked share of the reference
 // keyframe falls or the camera has moved enough. Lost tracking (too few features with depth, too
@@ -48,8 +49,9 @@ struct VisualOdometryConfig {
   double restart_sigma_position_m = 0.3;  ///< covariance added at a restart (documented jump)
   double restart_sigma_rotation_rad = 0.3;
   /// At each new keyframe, the window's keyframe poses and landmarks refined together (local
-  /// bundle adjustment, the oldest keyframe fixed; odometry/local_bundle_adjustment.h).
-  bool local_bundle_adjustment = true;
+  /// bundle adjustment, the oldest keyframe fixed; odometry/local_bundle_adjustment.h). Off by
+  /// default: on the real 7-Scenes frames it made the trajectory worse (docs/visual_odometry.md).
+  bool local_bundle_adjustment = false;
   int ba_iterations = 5;  ///< solver iterations of each of its two passes
   /// Depth noise of a feature at depth z in the adjustment: this times z^2 (m; 0: depth unused).
   double ba_depth_sigma_per_m2 = 0.005;
