@@ -314,6 +314,10 @@ class Table {
     real("association.merge_cross_class_fraction", 0, 1,
          "objects of two classes merge only past this share of the thinner one's extent",
          [f](GeoFusionConfig& c) { return &f(c)->merge_cross_class_fraction; });
+    integer("association.merge_co_measured_keyframes", 0, 100000,
+            "... and, once both were measured with depth support at this many keyframes, only "
+            "past merge_min_penetration_m (0: off)",
+            [f](GeoFusionConfig& c) { return &f(c)->merge_co_measured_keyframes; });
     flag("association.merge_on_convex_parts",
          "interpenetration for merging on each model's convex parts (false: one hull each)",
          [f](GeoFusionConfig& c) { return &f(c)->merge_on_convex_parts; });

@@ -118,14 +118,32 @@ bool mappedTwice(const ObjectTrack& a, const Eigen::Isometry3d& T_a, const Objec
   if (boxCollisionRatio(Ta, a.box_half, Tb, b.box_half) <= config.merge_ratio) return false;
   const double thinnest = 2.0 * std::min(a.box_half.minCoeff(), b.box_half.minCoeff());
   double needed = std::min(config.merge_min_penetration_m, config.merge_thin_fraction * thinnest);
-  if (a.model->name != b.model->name)
+  if (a.model->name != b.model->name) {
     needed = std::max(needed, config.merge_cross_class_fraction * thinnest);
+    // Seen together, each where the depth agreed, again and again: two objects, however thin one
+    // is; only one inside the other is a phantom (issue 45: scissors beside a pudding box,
+    // merged away after 66 keyframes when a pose update tipped the box 5 mm into them).
+    if (config.merge_co_measured_keyframes > 0 &&
+        coMeasuredKeyframes(a, b) >= config.merge_co_measured_keyframes)
+      needed = std::max(needed, config.merge_min_penetration_m);
+  }
   // Measured on the shapes (their convex parts), not on one hull: a hull spans the air inside a
   // banana's curve or a mug's handle, where a neighbour can lie (issue 45).
   const double depth = config.merge_on_convex_parts
                            ? collider->partsPenetration(a.model, T_a, b.model, T_b)
                            : collider->penetration(a.model, T_a, b.model, T_b);
   return depth >= needed;
+}
+
+int coMeasuredKeyframes(const ObjectTrack& a, const ObjectTrack& b) {
+  int n = 0;
+  for (const TrackObservation& x : a.observations) {
+    if (x.consistency <= 0.0) continue;
+    n += std::any_of(b.observations.begin(), b.observations.end(), [&](const TrackObservation& y) {
+      return y.keyframe == x.keyframe && y.consistency > 0.0;
+    });
+  }
+  return n;
 }
 
 void absorb(const ObjectTrack& dropped, ObjectTrack* kept) {

@@ -33,6 +33,11 @@ struct AssociationConfig {
   /// thinner object's smallest extent (a look-alike reported in place of the object): a real
   /// object differs from its mesh by millimetres, so real neighbours overlap a little.
   double merge_cross_class_fraction = 0.5;
+  /// Objects of two classes that the depth supported together (both measured with f_gc > 0 at
+  /// one keyframe) at this many keyframes or more are two real objects side by side, not a
+  /// look-alike in place of one: they merge only past merge_min_penetration_m, however thin
+  /// (a pair of scissors beside a pudding box, issue 45). 0: off.
+  int merge_co_measured_keyframes = 5;
   /// The interpenetration measured on each model's convex parts (ObjectModel::collision_parts:
   /// a banana or a clamp in pieces, issue 45); false: on one convex hull per model (the paper's
   /// test as built before, for comparison: a hull spans the air inside a curve or a handle).

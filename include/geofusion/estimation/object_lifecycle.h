@@ -116,10 +116,15 @@ void removeSeenAbsent(std::vector<ObjectTrack>* tracks, const std::vector<int>& 
 
 /// Whether a and b (at T_a, T_b) are one object mapped twice: their boxes overlap by more than
 /// merge_ratio and their hulls interpenetrate by more than neighbours in clutter can (scaled
-/// down for thin objects; across classes, merge_cross_class_fraction of the thinner extent).
+/// down for thin objects; across classes, merge_cross_class_fraction of the thinner extent, and
+/// merge_min_penetration_m once the depth supported both at merge_co_measured_keyframes).
 bool mappedTwice(const ObjectTrack& a, const Eigen::Isometry3d& T_a, const ObjectTrack& b,
                  const Eigen::Isometry3d& T_b, const AssociationConfig& config,
                  HullCollider* collider);
+
+/// Keyframes at which both a and b were measured with the depth supporting the measurement
+/// (f_gc > 0).
+int coMeasuredKeyframes(const ObjectTrack& a, const ObjectTrack& b);
 
 /// The observations of `dropped` (same class) taken into `kept`, one per keyframe (kept's own
 /// wins); best consistency and keyframe span combined.
