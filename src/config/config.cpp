@@ -279,6 +279,10 @@ class Table {
             "at most this many free-space checks (renders) a keyframe, least recently checked "
             "first (0: all)",
             [f](GeoFusionConfig& c) { return &f(c)->max_checks_per_keyframe; });
+    real("lifecycle.detected_nearby_m", 0, 1,
+         "a detection of its class this near counts as a sighting (free space cannot remove it "
+         "that keyframe), m (0: off)",
+         [f](GeoFusionConfig& c) { return &f(c)->detected_nearby_m; });
   }
   void association() {
     auto f = [](GeoFusionConfig& c) { return &c.estimator.association; };

@@ -243,6 +243,28 @@ KeyframeResult SceneEstimator::result(int keyframe, double stamp) const {
   return r;
 }
 
+std::vector<int> SceneEstimator::sightedTracks(const ScoredDetections& detections,
+                                               const std::vector<int>& measured) const {
+  std::vector<int> sighted = measured;
+  const double reach = config_.lifecycle.detected_nearby_m;
+  if (reach <= 0.0 || T_map_cam_.empty()) return sighted;
+  for (const Track& tr : tracks_) {
+    if (!tr.confirmed || std::find(sighted.begin(), sighted.end(), tr.id) != sighted.end())
+      continue;
+    const Eigen::Vector3d centre = reportedPose(tr) * tr.box_centre;
+    for (int k : detections.usable) {
+      const std::size_t i = static_cast<std::size_t>(k);
+      if (!detections.models[i] || detections.models[i]->name != tr.model->name) continue;
+      const Eigen::Vector3d seen = T_map_cam_.back() * detections.pose(i) * tr.box_centre;
+      if ((seen - centre).norm() <= reach) {
+        sighted.push_back(tr.id);
+        break;
+      }
+    }
+  }
+  return sighted;
+}
+
 KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
   const auto start = Clock::now();
   StageTimings timings;
@@ -274,7 +296,7 @@ KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
     if (stages_.free_space_removal && kf.depth.data) {
       const Eigen::Isometry3d T_cam_map = T_map_cam_.back().inverse();
       removeSeenAbsent(
-          &tracks_, touched, t, config_.lifecycle,
+          &tracks_, sightedTracks(detections, touched), t, config_.lifecycle,
           [&](const Track& tr) {
             return scorer_->score(tr.model, T_cam_map * reportedPose(tr), kf.depth, kf.K);
           },

@@ -251,6 +251,10 @@ class SceneEstimator {
   Eigen::Matrix<double, 6, 6> poseSpread(const Track& track,
                                          const Eigen::Isometry3d& T_map_obj) const;
   const Eigen::Isometry3d& reportedPose(const Track& track) const;
+  /// The ids of `measured` and of the confirmed tracks a detection of their class lies near
+  /// (lifecycle.detected_nearby_m): the objects sighted at this keyframe.
+  std::vector<int> sightedTracks(const ScoredDetections& detections,
+                                 const std::vector<int>& measured) const;
   /// Tracks in the map: confirmed ones (all for methods without false-positive removal).
   std::vector<std::size_t> reportedTracks() const;
   bool stageOneDue(int t) const;
