@@ -136,6 +136,7 @@ TEST_F(ObjectLifecycleTest, AnObjectStillReportedNearbyIsNotRemovedByFreeSpace) 
 TEST_F(ObjectLifecycleTest, FreeSpaceChecksAreBoundedAndTakeTurns) {
   EstimatorConfig config;
   config.lifecycle.max_checks_per_keyframe = 1;
+  config.lifecycle.free_space_keyframes = 3;
   estimator = std::make_unique<SceneEstimator>(models, config, test::sharedRenderer());
   KeyframeResult r;
   for (int k = 0; k < 5; ++k) r = step({box, brick, can});

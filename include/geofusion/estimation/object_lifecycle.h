@@ -33,7 +33,7 @@ struct LifecycleConfig {
   double free_space_outlier_ratio = 0.5;
   double max_occlusion_ratio = 0.5;
   double seen_inlier_ratio = 0.5;
-  int free_space_keyframes = 3;
+  int free_space_keyframes = 2;  ///< 3 before issue 45 (see detected_nearby_m)
   /// At most this many of the checks (renders) a keyframe, the objects checked least recently
   /// first: the cost stays bounded when many mapped objects go undetected (biased or missing
   /// detections). 0: every undetected object in view, every keyframe.
