@@ -4,7 +4,9 @@
 
 #include <ceres/ceres.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 namespace geofusion {
@@ -99,6 +101,13 @@ BundleAdjustmentResult localBundleAdjustment(const PinholeIntrinsics& K,
     sigma_px[i] = options.pixel_sigma * std::pow(options.scale_factor, std::max(0, o.level));
     depth[i] = usesDepth(o, options);
     sigma_z[i] = depth[i] ? options.depth_sigma_per_m2 * o.depth_m * o.depth_m : 0.0;
+    // A point behind the camera at the start has no residual (it would stop the solver): an
+    // outlier from the first pass on.
+    const PoseBlock& pose = poses[static_cast<std::size_t>(o.keyframe)];
+    if ((pose.q * X[static_cast<std::size_t>(o.point)] + pose.t).z() <= 1e-3) {
+      (*outlier)[i] = 1;
+      ++result.outliers;
+    }
   }
 
   // Two passes: all observations, then without those still far off.
@@ -123,11 +132,29 @@ BundleAdjustmentResult localBundleAdjustment(const PinholeIntrinsics& K,
       result.problem = "no point is seen from two keyframes";
       return result;
     }
+    // The gauge: the fixed keyframes that take part, else the first ones that do (one with
+    // depth, which fixes the scale; two without).
+    const int gauge = options.depth_sigma_per_m2 > 0 ? 1 : 2;
+    std::vector<char> hold(n_kf, 0);
+    int held = 0, taking_part = 0;
+    for (std::size_t k = 0; k < n_kf; ++k) {
+      if (!problem.HasParameterBlock(poses[k].q.coeffs().data())) continue;
+      ++taking_part;
+      if (fixed[k]) hold[k] = 1, ++held;
+    }
+    for (std::size_t k = 0; k < n_kf && held < gauge; ++k) {
+      if (hold[k] || !problem.HasParameterBlock(poses[k].q.coeffs().data())) continue;
+      hold[k] = 1, ++held;
+    }
+    if (taking_part <= held) {
+      result.problem = "no keyframe to adjust beside the fixed ones";
+      return result;
+    }
     for (std::size_t k = 0; k < n_kf; ++k) {
       double* q = poses[k].q.coeffs().data();
       if (!problem.HasParameterBlock(q)) continue;
       ceres_compat::setManifold(&problem, q, new ceres_compat::QuaternionManifold);
-      if (fixed[k]) {
+      if (hold[k]) {
         problem.SetParameterBlockConstant(q);
         problem.SetParameterBlockConstant(poses[k].t.data());
       }
@@ -148,7 +175,7 @@ BundleAdjustmentResult localBundleAdjustment(const PinholeIntrinsics& K,
       result.initial_cost = summary.initial_cost;
       for (std::size_t i = 0; i < observations.size(); ++i) {
         const BundleObservation& o = observations[i];
-        if (seen[static_cast<std::size_t>(o.point)] < 2) continue;
+        if ((*outlier)[i] || seen[static_cast<std::size_t>(o.point)] < 2) continue;
         const double e =
             chi2(o, K, sigma_px[i], sigma_z[i], poses[static_cast<std::size_t>(o.keyframe)],
                  X[static_cast<std::size_t>(o.point)], depth[i]);

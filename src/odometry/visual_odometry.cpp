@@ -328,7 +328,14 @@ void VisualOdometry::Impl::adjustLocalMap(const PinholeIntrinsics& K) {
       localBundleAdjustment(K, options, observations, fixed, &poses, &points, &outlier);
   if (!r.solved) return;  // the window keeps its poses: tracking goes on as without it
   const Eigen::Isometry3d correction = poses.back() * keyframes.back().T_odom_cam.inverse();
-  for (std::size_t k = 0; k < keyframes.size(); ++k) keyframes[k].T_odom_cam = poses[k];
+  for (std::size_t k = 0; k < keyframes.size(); ++k) {
+    // A landmark only this keyframe sees (not adjusted) moves with it.
+    const Eigen::Isometry3d moved = poses[k] * keyframes[k].T_odom_cam.inverse();
+    for (const VoObservation& o : keyframes[k].observations)
+      if (o.landmark >= 0 && count[o.landmark] == 1)
+        landmarks.at(o.landmark).X = moved * landmarks.at(o.landmark).X;
+    keyframes[k].T_odom_cam = poses[k];
+  }
   for (std::size_t p = 0; p < points.size(); ++p) landmarks.at(point_landmark[p]).X = points[p];
   for (std::size_t i = 0; i < observations.size(); ++i)
     if (outlier[i]) keyframes[source[i].first].observations[source[i].second].landmark = -1;

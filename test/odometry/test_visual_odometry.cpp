@@ -151,6 +151,35 @@ TEST(VisualOdometry, TableOrbit) {
   EXPECT_GT(early_trace, 0.0);
 }
 
+// The optional local bundle adjustment (off by default) on the same 4 s of the orbit: every
+// keyframe from the second on adjusts the window; the track stays as good.
+TEST(VisualOdometry, TableOrbitWithLocalBundleAdjustment) {
+  RenderedScene& s = scene();
+  TrajectoryConfig traj = s.suite.trajectory;
+  traj.frames = 120;
+  const std::vector<FramePose> poses = makeTrajectory(s.scene, traj, s.suite.scenes[0].seed);
+  VisualOdometryConfig config;
+  config.local_bundle_adjustment = true;
+  VisualOdometry vo(config);
+  std::vector<double> stamps, true_stamps;
+  std::vector<Eigen::Isometry3d> est, truth;
+  int keyframes = 0;
+  for (const FramePose& p : poses) {
+    const VoFrameResult r = s.track(vo, p.T_map_optical, p.stamp_s);
+    true_stamps.push_back(p.stamp_s);
+    truth.push_back(p.T_map_optical);
+    keyframes += r.keyframe;
+    if (!r.pose_valid) continue;
+    ASSERT_TRUE(r.T_odom_cam.matrix().allFinite());
+    stamps.push_back(p.stamp_s);
+    est.push_back(r.T_odom_cam);
+  }
+  EXPECT_GE(keyframes, 3);  // the window was adjusted at least twice
+  EXPECT_GE(est.size(), poses.size() - 3);
+  const TrajectoryErrors e = trajectoryErrors(stamps, est, true_stamps, truth);
+  EXPECT_LT(e.ate_rmse_m, 0.015) << "path " << e.length_m << " m";
+}
+
 TEST(VisualOdometry, BlankFrameLostThenRecovered) {
   RenderedScene& s = scene();
   VisualOdometryConfig config;

@@ -39,7 +39,7 @@ struct LifecycleConfig {
   /// detections). 0: every undetected object in view, every keyframe.
   int max_checks_per_keyframe = 8;
   /// A detection of an object's class within this distance of it (centres, any f_gc) counts as
-  /// a sighting: that keyframe neither shows it gone nor adds to the count. A detector still
+  /// a sighting, as a measurement does: the free-space count restarts. A detector still
   /// reporting the object a few centimetres off (a colour-only estimator's error, which the
   /// depth refutes at both poses) is not evidence of absence (issue 45). 0: off.
   double detected_nearby_m = 0.05;

@@ -1,8 +1,10 @@
 // Local bundle adjustment of an RGB-D keyframe window (the visual odometry's back end, as
 // ORB-SLAM2's local BA): the window's keyframe poses and the map points they observe, refined
 // together in Ceres by each observation's reprojection error and, where the feature had depth, its
-// depth error; robust (Huber), the first keyframes held fixed (they fix the gauge), observations
-// still far off after the first pass dropped as outliers before the second.
+// depth error; robust (Huber), the keyframes flagged fixed held (they fix the gauge; when none
+// of them sees a point seen twice, the first keyframe that does, two without depth), points
+// behind a camera at the start and observations still far off after the first pass dropped as
+// outliers.
 #pragma once
 
 #include "geofusion/common/camera.h"
