@@ -62,6 +62,36 @@ double chi2(const BundleObservation& o, const PinholeIntrinsics& K, double sigma
   return e;
 }
 
+// The gauge: the fixed keyframes that take part in `problem`, else the first ones that do
+// (`gauge` of them: one with depth, which fixes the scale; two without) held constant; every
+// rotation on the quaternion manifold. False when no keyframe is left to adjust.
+bool holdGauge(const std::vector<char>& fixed, int gauge, ceres::Problem* problem,
+               std::vector<PoseBlock>* poses) {
+  const std::size_t n_kf = poses->size();
+  std::vector<char> hold(n_kf, 0);
+  int held = 0, taking_part = 0;
+  for (std::size_t k = 0; k < n_kf; ++k) {
+    if (!problem->HasParameterBlock((*poses)[k].q.coeffs().data())) continue;
+    ++taking_part;
+    if (fixed[k]) hold[k] = 1, ++held;
+  }
+  for (std::size_t k = 0; k < n_kf && held < gauge; ++k) {
+    if (hold[k] || !problem->HasParameterBlock((*poses)[k].q.coeffs().data())) continue;
+    hold[k] = 1, ++held;
+  }
+  if (taking_part <= held) return false;
+  for (std::size_t k = 0; k < n_kf; ++k) {
+    double* q = (*poses)[k].q.coeffs().data();
+    if (!problem->HasParameterBlock(q)) continue;
+    ceres_compat::setManifold(problem, q, new ceres_compat::QuaternionManifold);
+    if (hold[k]) {
+      problem->SetParameterBlockConstant(q);
+      problem->SetParameterBlockConstant((*poses)[k].t.data());
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 BundleAdjustmentResult localBundleAdjustment(const PinholeIntrinsics& K,
@@ -132,32 +162,9 @@ BundleAdjustmentResult localBundleAdjustment(const PinholeIntrinsics& K,
       result.problem = "no point is seen from two keyframes";
       return result;
     }
-    // The gauge: the fixed keyframes that take part, else the first ones that do (one with
-    // depth, which fixes the scale; two without).
-    const int gauge = options.depth_sigma_per_m2 > 0 ? 1 : 2;
-    std::vector<char> hold(n_kf, 0);
-    int held = 0, taking_part = 0;
-    for (std::size_t k = 0; k < n_kf; ++k) {
-      if (!problem.HasParameterBlock(poses[k].q.coeffs().data())) continue;
-      ++taking_part;
-      if (fixed[k]) hold[k] = 1, ++held;
-    }
-    for (std::size_t k = 0; k < n_kf && held < gauge; ++k) {
-      if (hold[k] || !problem.HasParameterBlock(poses[k].q.coeffs().data())) continue;
-      hold[k] = 1, ++held;
-    }
-    if (taking_part <= held) {
+    if (!holdGauge(fixed, options.depth_sigma_per_m2 > 0 ? 1 : 2, &problem, &poses)) {
       result.problem = "no keyframe to adjust beside the fixed ones";
       return result;
-    }
-    for (std::size_t k = 0; k < n_kf; ++k) {
-      double* q = poses[k].q.coeffs().data();
-      if (!problem.HasParameterBlock(q)) continue;
-      ceres_compat::setManifold(&problem, q, new ceres_compat::QuaternionManifold);
-      if (hold[k]) {
-        problem.SetParameterBlockConstant(q);
-        problem.SetParameterBlockConstant(poses[k].t.data());
-      }
     }
     ceres::Solver::Options solver;
     solver.linear_solver_type = ceres::SPARSE_SCHUR;
