@@ -64,7 +64,7 @@ done
 [ ${#bags[@]} -gt 0 ] || { say "no recordings in $data"; exit 1; }
 # One method on one scene: the run, then its evaluation (its output printed whole at its end).
 run_one() {
-  local bag="$1" method="$2" scene gt model_set results params_var params_file params log
+  local bag="$1" method="$2" scene gt model_set results params_var params_file params log scene_id
   scene=$(basename "$bag" .bag)
   gt="$data/${scene}_gt.yaml"
   model_set=$(sed -n 's/^model_set: *//p' "$gt" | head -1)
@@ -73,9 +73,13 @@ run_one() {
   params_file="${!params_var:-${PARAMS:-}}"
   params=()
   [ -n "$params_file" ] && params=(--params "$params_file")
+  # BOP results beside the run (docs/results.md): scene id the scene's number (bench_03: 3).
+  scene_id=$(printf '%s' "$scene" | sed -n 's/.*[^0-9]\([0-9][0-9]*\)$/\1/p')
+  scene_id=$((10#${scene_id:-0}))
   log=$(
     "$bin/run_offline" --bag "$bag" --out "$results" "${params[@]}" --method "$method" \
-      --model-set "$model_set" "${models[@]}" --quiet 2>&1 | sed 's/^run_offline: /  /'
+      --model-set "$model_set" "${models[@]}" --bop-results "${results%.yaml}.bop.csv" \
+      --bop-scene-id "$scene_id" --quiet 2>&1 | sed 's/^run_offline: /  /'
     "$bin/evaluate_run" --ground-truth "$gt" --results "$results" --model-set "$model_set" \
       "${models[@]}" --json "$out/eval/$scene/$method.json" --quiet 2>&1
   ) || { printf '%s\n' "$log"; say "$scene / $method failed"; touch "$results.failed"; return 1; }

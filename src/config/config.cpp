@@ -371,6 +371,14 @@ class Table {
     real("stage_one.gate_chi2", 1, 1e6,
          "... a measurement's squared whitened residual beyond this: left out of the next solve",
          [f](GeoFusionConfig& c) { return &f(c)->gate_chi2; });
+    flag("stage_one.axis_from_detections",
+         "the angle about a can's axis (shape symmetric, label not) follows its detections where "
+         "they agree; off: free",
+         [f](GeoFusionConfig& c) { return &f(c)->axis_from_detections; });
+    real("stage_one.axis_agreement_min", 0, 1,
+         "... the detections agree when the resultant of their angles about the axis is at least "
+         "this",
+         [f](GeoFusionConfig& c) { return &f(c)->axis_agreement_min; });
   }
   void relations() {
     auto f = [](GeoFusionConfig& c) { return &c.estimator.contacts; };

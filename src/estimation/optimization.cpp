@@ -3,6 +3,7 @@
 #include "geofusion/estimation/depth_refinement.h"
 
 #include "geofusion/estimation/association.h"
+#include "geofusion/estimation/symmetry_axis.h"
 #include "geofusion/estimation/factors/contact_factor.h"
 #include "geofusion/estimation/factors/pose_block.h"
 #include "geofusion/estimation/factors/relative_pose_factor.h"
@@ -145,13 +146,8 @@ Eigen::Matrix3d alignToReference(const Symmetry& symmetry, const Eigen::Matrix3d
                                  const Eigen::Matrix3d& R_measured) {
   if (symmetry.type != Symmetry::Type::kContinuous)
     return closestSymmetricEquivalent(symmetry, R_reference, R_measured);
-  // The rotation R(a, theta) about the axis closest to E = R_measured^T R_reference maximises
-  // trace(R^T E) = cos(theta) (tr E - a'Ea) + sin(theta) a . vee(E - E') + a'Ea.
   const Eigen::Vector3d a = symmetry.axis.normalized();
-  const Eigen::Matrix3d E = R_measured.transpose() * R_reference;
-  const Eigen::Vector3d vee(E(2, 1) - E(1, 2), E(0, 2) - E(2, 0), E(1, 0) - E(0, 1));
-  const double theta = std::atan2(a.dot(vee), E.trace() - a.dot(E * a));
-  return R_measured * Eigen::AngleAxisd(theta, a).toRotationMatrix();
+  return R_measured * Eigen::AngleAxisd(axialOffset(a, R_reference, R_measured), a).toRotationMatrix();
 }
 
 void FoldedMeasurements::add(const Eigen::Isometry3d& T_map_cam, const StageOneMeasurement& m,

@@ -200,7 +200,7 @@ Eigen::Matrix<double, 6, 6> SceneEstimator::poseSpread(const Track& track,
   // and divided by the number of all of them.
   constexpr std::size_t kSpreadMeasurements = 100;
   Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
-  const Symmetry& symmetry = track.model->symmetry;
+  const Symmetry& symmetry = track.symmetryModel()->symmetry;
   const std::size_t n_all = track.observations.size();
   int n = 0;
   for (std::size_t k = n_all - std::min(n_all, kSpreadMeasurements); k < n_all; ++k) {
@@ -572,6 +572,37 @@ std::vector<std::size_t> SceneEstimator::reportedTracks() const {
   return out;
 }
 
+// Issue 51: a detector that reads a can's label sees the angle about its axis that the depth
+// cannot. Where the track's detections in stage I's window agree about it (resultant at least
+// stage_one.axis_agreement_min), the estimate is turned onto their weighted circular mean and
+// optimised with the model's appearance symmetry; where they scatter the axis stays free. No
+// detections in the window: the track keeps what it had.
+void SceneEstimator::settleSymmetryAxis(Track* tr) {
+  const StageOneConfig& c = config_.stage_one;
+  if (!c.axis_from_detections || !tr->model || !axisSeenByDetector(*tr->model)) {
+    tr->appearance_model.reset();
+    return;
+  }
+  std::vector<AxialSample> samples;
+  for (const Observation& o : tr->observations) {
+    if (o.folded || o.gated || o.keyframe < 0 || o.keyframe >= static_cast<int>(T_map_cam_.size()))
+      continue;
+    const Eigen::Isometry3d T = T_map_cam_[static_cast<std::size_t>(o.keyframe)] * o.T_cam_obj;
+    samples.push_back({T.linear(), std::max(o.consistency, 0.05)});
+  }
+  const AxialAgreement a = axialAgreement(*tr->model, tr->T_stage_one.linear(), samples);
+  if (a.samples == 0) return;
+  if (a.resultant < c.axis_agreement_min) {
+    tr->appearance_model.reset();
+    return;
+  }
+  const Eigen::Matrix3d turn =
+      Eigen::AngleAxisd(-a.mean_rad, tr->model->symmetry.axis.normalized()).toRotationMatrix();
+  tr->T_stage_one.linear() = tr->T_stage_one.linear() * turn;
+  tr->T_refined.linear() = tr->T_refined.linear() * turn;
+  tr->appearance_model = appearance_models_.of(tr->model);
+}
+
 StageReport SceneEstimator::runStageOne() {
   StageOneConfig config = config_.stage_one;
   config.odometry_sigma_position_m *= std::sqrt(odometry_variance_);
@@ -588,6 +619,7 @@ StageReport SceneEstimator::runStageOne() {
   const std::vector<std::size_t> reported = reportedTracks();
   for (std::size_t i = 0; i < reported.size(); ++i) {
     Track& tr = tracks_[reported[i]];
+    settleSymmetryAxis(&tr);
     for (std::size_t k = 0; k < tr.observations.size(); ++k) {
       Observation& o = tr.observations[k];
       if (o.folded) continue;
@@ -595,7 +627,7 @@ StageReport SceneEstimator::runStageOne() {
                                   o.gated ? 0.0 : 1.0 / tr.variance,
                                   o.refined ? config_.refinement.ray_sigma_m : 0.0};
       if (o.keyframe < first) {
-        tr.folded.add(T_map_cam_[static_cast<std::size_t>(o.keyframe)], m, tr.model.get(),
+        tr.folded.add(T_map_cam_[static_cast<std::size_t>(o.keyframe)], m, tr.symmetryModel(),
                       tr.T_stage_one.linear(), config);
         o.folded = true;
         continue;
@@ -604,7 +636,7 @@ StageReport SceneEstimator::runStageOne() {
       sources.emplace_back(reported[i], k);
     }
     objects.push_back(tr.T_stage_one);
-    models.push_back(tr.model.get());
+    models.push_back(tr.symmetryModel());
     folded.push_back(tr.folded);
   }
   const StageOneSummary s =
@@ -751,7 +783,7 @@ StageReport SceneEstimator::runRelationsAndStageTwo(const Keyframe* kf, StageTim
     const Track& tr = tracks_[reported[i]];
     poses.push_back(tr.T_refined);
     priors.push_back(tr.T_stage_one);
-    models.push_back(tr.model.get());
+    models.push_back(tr.symmetryModel());
   }
   const StageTwoSummary s = optimizeStageTwo(&poses, models, priors, local_contacts,
                                              support_model_ ? &ground : nullptr, config_.stage_two);

@@ -4,6 +4,7 @@
 
 #include "geofusion/common/atomic_file.h"
 #include "geofusion/estimation/relations.h"
+#include "geofusion/evaluation/bop_metrics.h"
 #include "geofusion/evaluation/evaluation.h"
 #include "geofusion/evaluation/metrics.h"
 #include "geofusion/simulation/clutter_scene.h"
@@ -133,8 +134,44 @@ void describeRun(const GroundTruth& gt, const RunResults& results, RunEvaluation
 
 // One keyframe's images for COCO: the true objects' projected boxes (crowd when mostly hidden) and
 // the estimate's boxes, each with its ADD-S against the same-class truths its box overlaps.
+// BOP's view of each true object's model (bop_metrics.h), made once per class.
+class BopModels {
+ public:
+  const BopModel& of(const ObjectModel& model, RunEvaluation* ev) {
+    auto it = models_.find(model.name);
+    if (it == models_.end()) {
+      it = models_.emplace(model.name, bopModelOf(model)).first;
+      ev->diameters_m[model.id] = it->second.diameter_m;
+    }
+    return it->second;
+  }
+
+ private:
+  std::map<std::string, BopModel> models_;
+};
+
+// The estimate's errors against the image's ground truth (from `first_truth` on): ADD-S and ADD
+// where the boxes overlap, BOP's MSSD and MSPD against every same-class truth not ignored.
+void scoreEstimate(const GroundTruth& gt, std::size_t first_truth,
+                   const std::vector<Eigen::Isometry3d>& truth_poses, const ObjectEstimate& o,
+                   const Eigen::Isometry3d& T, const EvaluationConfig& config, AddsEvaluator* adds,
+                   BopModels* bop, RunEvaluation* ev, DetectionBox* d) {
+  for (std::size_t g = first_truth; g < ev->ground_truth.size(); ++g) {
+    const GroundTruthBox& t = ev->ground_truth[g];
+    if (t.crowd || t.class_id != d->class_id) continue;
+    const Eigen::Isometry3d& T_true = truth_poses[g - first_truth];
+    const ObjectModel& truth_model = *gt.scene.objects[static_cast<std::size_t>(t.object)].model;
+    const BopModel& m = bop->of(truth_model, ev);
+    d->bop.push_back({t.id, mssdError(m, T, T_true), mspdError(m, T, T_true, gt.intrinsics)});
+    if (boxIou(t.box, d->box) < config.adds_min_iou) continue;
+    d->adds_m.emplace_back(t.id, (*adds)(o.model->points, T, T_true));
+    d->add_m.emplace_back(t.id, addError(o.model->points, T, T_true));
+  }
+}
+
 void evaluateKeyframe(const GroundTruth& gt, const GroundTruthFrame& f, const KeyframeResult& k,
-                      const EvaluationConfig& config, AddsEvaluator* adds, RunEvaluation* ev) {
+                      const EvaluationConfig& config, AddsEvaluator* adds, BopModels* bop,
+                      RunEvaluation* ev) {
   const PinholeIntrinsics& K = gt.intrinsics;
   const int n_objects = static_cast<int>(gt.scene.objects.size());
   ev->images.emplace_back(k.keyframe, k.stamp_s);
@@ -176,12 +213,7 @@ void evaluateKeyframe(const GroundTruth& gt, const GroundTruthFrame& f, const Ke
     d.box = box;
     d.score = o.existence;
     d.object_id = o.id;
-    for (std::size_t g = first_truth; g < ev->ground_truth.size(); ++g) {
-      const GroundTruthBox& t = ev->ground_truth[g];
-      if (t.crowd || t.class_id != d.class_id || boxIou(t.box, d.box) < config.adds_min_iou)
-        continue;
-      d.adds_m.emplace_back(t.id, (*adds)(o.model->points, T, truth_poses[g - first_truth]));
-    }
+    scoreEstimate(gt, first_truth, truth_poses, o, T, config, adds, bop, ev, &d);
     ev->detections.push_back(std::move(d));
   }
 }
@@ -560,13 +592,14 @@ bool evaluateRun(const GroundTruth& gt, const RunResults& results, const Evaluat
   describeRun(gt, results, &ev);
   const KeyframeMatcher frames(gt, config.stamp_tolerance_s);
   AddsEvaluator adds;
+  BopModels bop;
   for (const KeyframeResult& k : results.keyframes) {
     const GroundTruthFrame* f = frames.at(k.stamp_s);
     if (!f || f->visible_fraction.size() != gt.scene.objects.size()) {
       ++ev.unmatched_keyframes;
       continue;
     }
-    evaluateKeyframe(gt, *f, k, config, &adds, &ev);
+    evaluateKeyframe(gt, *f, k, config, &adds, &bop, &ev);
   }
   if (ev.images.empty()) {
     if (error) *error = "no keyframe of the results is a keyframe of the ground truth";
@@ -647,15 +680,24 @@ nlohmann::json detectionsJson(const RunEvaluation& e) {
   using nlohmann::json;
   json out = json::array();
   for (const DetectionBox& d : e.detections) {
-    json adds = json::object();
+    json adds = json::object(), add = json::object(), mssd = json::object(),
+         mspd = json::object();
     for (const auto& a : d.adds_m) adds[std::to_string(a.first)] = a.second;
+    for (const auto& a : d.add_m) add[std::to_string(a.first)] = a.second;
+    for (const auto& b : d.bop) {
+      mssd[std::to_string(b.truth)] = b.mssd_m;
+      mspd[std::to_string(b.truth)] = std::isfinite(b.mspd_px) ? json(b.mspd_px) : json(nullptr);
+    }
     out.push_back({{"id", d.id},
                    {"image_id", d.image},
                    {"category_id", d.class_id},
                    {"bbox", boxJson(d.box)},
                    {"score", d.score},
                    {"object_id", d.object_id},
-                   {"adds_m", adds}});
+                   {"adds_m", adds},
+                   {"add_m", add},
+                   {"mssd_m", mssd},
+                   {"mspd_px", mspd}});
   }
   return out;
 }
@@ -785,8 +827,13 @@ bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::s
   j["config"] = e.config_yaml.empty() ? nlohmann::json(nullptr) : jsonOf(YAML::Load(e.config_yaml));
   j["image_size"] = {e.image_width, e.image_height};
   j["categories"] = json::array();
-  for (const auto& c : e.categories)
-    j["categories"].push_back({{"id", c.first}, {"name", c.second}});
+  for (const auto& c : e.categories) {
+    const auto d = e.diameters_m.find(c.first);
+    j["categories"].push_back({{"id", c.first},
+                               {"name", c.second},
+                               {"diameter_m", d == e.diameters_m.end() ? json(nullptr)
+                                                                       : json(d->second)}});
+  }
   j["images"] = json::array();
   for (const auto& i : e.images) j["images"].push_back({{"id", i.first}, {"stamp", i.second}});
   j["unmatched_keyframes"] = e.unmatched_keyframes;

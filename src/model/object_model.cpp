@@ -69,6 +69,21 @@ SurfaceFeatures parseFeatures(const YAML::Node& n) {
   return f;
 }
 
+// `bop_origin`: a point, or "box_centre" (of the evaluation points when loaded, else the mesh).
+Eigen::Vector3d parseBopOrigin(const YAML::Node& n, const ObjectModel& m) {
+  if (n.IsScalar() && n.as<std::string>() == "box_centre") {
+    Eigen::AlignedBox3d box;
+    for (const Eigen::Vector3f& p : m.points) box.extend(p.cast<double>());
+    if (m.points.empty())
+      for (const Eigen::Vector3f& v : m.mesh.vertices) box.extend(v.cast<double>());
+    if (box.isEmpty()) throw std::runtime_error("bop_origin: box_centre of an empty model");
+    return box.center();
+  }
+  const Eigen::Vector3d p = vec3(n, "bop_origin");
+  if (!p.allFinite()) throw std::runtime_error("bop_origin must be finite");
+  return p;
+}
+
 Symmetry continuousAboutZ() {
   Symmetry s;
   s.type = Symmetry::Type::kContinuous;
@@ -88,6 +103,20 @@ Symmetry boxSymmetry() {
 }
 
 }  // namespace
+
+int orderAbout(const Symmetry& symmetry, const Eigen::Vector3d& axis) {
+  const Eigen::Vector3d a = axis.normalized();
+  const double cos_tolerance = std::cos(3.0 * M_PI / 180.0);
+  if (symmetry.type == Symmetry::Type::kContinuous)
+    return std::abs(symmetry.axis.normalized().dot(a)) >= cos_tolerance ? 0 : 1;
+  int n = 1;
+  if (symmetry.type != Symmetry::Type::kDiscrete) return n;
+  for (const Eigen::Quaterniond& q : symmetry.rotations) {
+    const Eigen::AngleAxisd r(q);
+    if (r.angle() > 1e-6 && std::abs(r.axis().dot(a)) >= cos_tolerance) ++n;
+  }
+  return n;
+}
 
 TriangleMesh collisionHull(const TriangleMesh& mesh) {
   return convexHull(simplifyMesh(mesh, 400, 0.002).vertices);
@@ -213,7 +242,7 @@ ModelSet ModelSet::builtinPrimitives() {
     m.name = name;
     m.id = id;
     m.mesh = makeBox(Eigen::Vector3d(x, y, z));
-    m.symmetry = boxSymmetry();
+    m.symmetry = m.appearance_symmetry = boxSymmetry();  // untextured: appearance = shape
     set.add(std::move(m));
   };
   auto cylinder = [&set](const char* name, int id, double diameter, double height) {
@@ -221,7 +250,7 @@ ModelSet ModelSet::builtinPrimitives() {
     m.name = name;
     m.id = id;
     m.mesh = makeCylinder(0.5 * diameter, height);
-    m.symmetry = continuousAboutZ();
+    m.symmetry = m.appearance_symmetry = continuousAboutZ();
     set.add(std::move(m));
   };
   // Sizes measured on the YCB-Video scans (metres; the bounding boxes of their official
@@ -290,6 +319,9 @@ bool ModelSet::load(const std::string& yaml_path, const std::string& models_dir,
         for (auto& p : m.points) p *= static_cast<float>(c["scale"].as<double>(1.0));
       }
       m.symmetry = parseSymmetry(c["symmetry"]);
+      m.appearance_symmetry =
+          c["appearance_symmetry"] ? parseSymmetry(c["appearance_symmetry"]) : m.symmetry;
+      if (c["bop_origin"]) m.bop_origin = parseBopOrigin(c["bop_origin"], m);
       if (c["material"] && !parseSurfaceMaterial(c["material"].as<std::string>(), &m.material)) {
         throw std::runtime_error("unknown material '" + c["material"].as<std::string>() +
                                  "' (diffuse, dark, specular, transparent)");

@@ -7,6 +7,7 @@
 #include "python_conversions.h"
 
 #include "geofusion/config/config.h"
+#include "geofusion/estimation/bop_results.h"
 #include "geofusion/estimation/frame_by_frame.h"
 #include "geofusion/estimation/scene_estimator.h"
 #include "geofusion/model/object_model.h"
@@ -120,7 +121,10 @@ class PyEstimator {
     DetectionTally tally;
     for (const WorldDetection& w : checker_.process(raw, kf.T_odom_cam, &tally))
       kf.detections.push_back(w.measurement);
-    py::dict out = keyframeDict(estimator_->addKeyframe(kf));
+    KeyframeResult result = estimator_->addKeyframe(kf);
+    py::dict out = keyframeDict(result);
+    record_.keyframes.push_back(std::move(result));  // for bop_results
+    last_K_ = kf.K;
     out["skipped_detections"] =
         out["skipped_detections"].cast<std::size_t>() + tally.totalSkipped();
     return out;
@@ -139,6 +143,18 @@ class PyEstimator {
     return out;
   }
 
+  // The keyframes so far as BOP results (bop_results.h); written to `path` when one is given.
+  std::string bopResults(const py::object& path, int scene_id) const {
+    BopIds ids;
+    ids.scene_id = scene_id;
+    if (!path.is_none()) {
+      std::string error;
+      if (!writeBopResults(path.cast<std::string>(), record_, last_K_, ids, &error))
+        throw std::runtime_error("bop_results: " + error);
+    }
+    return bopResultsCsv(record_, last_K_, ids);
+  }
+
   py::list objects() const { return objectList(estimator_->objects()); }
   py::array trajectory() const { return poses(estimator_->trajectory()); }
   int numKeyframes() const { return estimator_->numKeyframes(); }
@@ -149,6 +165,8 @@ class PyEstimator {
   GeoFusionConfig config_;
   FrameByFrame checker_;
   std::unique_ptr<SceneEstimator> estimator_;
+  RunResults record_;  ///< every keyframe's result (bop_results)
+  PinholeIntrinsics last_K_;
 };
 
 // f_gc of one pose against a depth image, with the configuration's consistency settings.
@@ -264,6 +282,10 @@ void bindModule(py::module_& m) {
            "The final map (a last stage I and II), contacts, "
            "trajectory.")
       .def("objects", &PyEstimator::objects)
+      .def("bop_results", &PyEstimator::bopResults, py::arg("path") = py::none(),
+           py::arg("scene_id") = 0,
+           "Every keyframe's map objects in view as BOP results (CSV text, docs/results.md); "
+           "written to path when given.")
       .def_property_readonly("trajectory", &PyEstimator::trajectory)
       .def_property_readonly("num_keyframes", &PyEstimator::numKeyframes)
       .def_property_readonly("method", &PyEstimator::method);

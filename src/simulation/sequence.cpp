@@ -465,16 +465,17 @@ void SequenceRenderer::detectObjects(const Eigen::Isometry3d& T_cam_map,
     for (const auto& g : detector.class_noise_gain)
       if (g.first == model.name) gain = g.second;
     Eigen::Isometry3d T = T_cam_map * scene_.objects[i].T_world_obj;
-    if (model.symmetry.type == Symmetry::Type::kDiscrete && !model.symmetry.rotations.empty() &&
+    // The detector reads the texture: it confuses only what looks alike (the appearance's
+    // symmetries; a labelled can's angle about its axis it sees).
+    const Symmetry& looks = model.appearance_symmetry;
+    if (looks.type == Symmetry::Type::kDiscrete && !looks.rotations.empty() &&
         uni(rng) < detector.symmetric_flip_rate) {
-      const auto& q =
-          model.symmetry
-              .rotations[static_cast<std::size_t>(uni(rng) * model.symmetry.rotations.size()) %
-                         model.symmetry.rotations.size()];
+      const auto& q = looks.rotations[static_cast<std::size_t>(uni(rng) * looks.rotations.size()) %
+                                      looks.rotations.size()];
       T.linear() = T.linear() * q.toRotationMatrix();
-    } else if (model.symmetry.type == Symmetry::Type::kContinuous) {
-      T.linear() = T.linear() *
-                   Eigen::AngleAxisd(2 * M_PI * uni(rng), model.symmetry.axis).toRotationMatrix();
+    } else if (looks.type == Symmetry::Type::kContinuous) {
+      T.linear() =
+          T.linear() * Eigen::AngleAxisd(2 * M_PI * uni(rng), looks.axis).toRotationMatrix();
     }
     if (errors_) T = errors_->apply(i, T);  // the persistent bias, then the frame's own error
     if (uni(rng) < detector.gross_error_rate) {

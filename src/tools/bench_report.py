@@ -230,7 +230,7 @@ def coco_metrics(evals, score_threshold=SCORE_THRESHOLD, box_key='bbox'):
                                if not a['iscrowd'] and a['category_id'] in cat_ids)}
     counts = {iou: {'tp': 0, 'fp': 0, 'gt': 0} for iou in (50, 75)}
     tp_adds, missing = [], 0
-    gt_errors = {}
+    gt_errors, gt_add_errors = {}, {}
     if not results:
         # No detections: pycocotools cannot load an empty result list; nothing is found.
         value = 0.0 if out['ground_truth'] else None
@@ -261,6 +261,7 @@ def coco_metrics(evals, score_threshold=SCORE_THRESHOLD, box_key='bbox'):
             for gid, ignored in zip(e['gtIds'], gt_ignore):
                 if not ignored:
                     gt_errors[gid] = math.inf
+                    gt_add_errors[gid] = math.inf
             for iou, t in t_index.items():
                 c = counts[iou]
                 c['gt'] += int(np.count_nonzero(~gt_ignore))
@@ -282,11 +283,20 @@ def coco_metrics(evals, score_threshold=SCORE_THRESHOLD, box_key='bbox'):
                             value = math.inf
                         tp_adds.append(float(value))
                         gt_errors[matched] = float(value)
+                        add = (det.get('add_m') or {}).get(str(gt_file_id))
+                        gt_add_errors[matched] = math.inf if add is None else float(add)
     for iou, c in counts.items():
         out['tp%d' % iou], out['fp%d' % iou], out['gt%d' % iou] = c['tp'], c['fp'], c['gt']
         out['precision%d' % iou] = _ratio(c['tp'], c['tp'] + c['fp'])
         out['recall%d' % iou] = _ratio(c['tp'], c['gt'])
     out.update(adds_metrics(tp_adds, list(gt_errors.values())))
+    # ADD (no symmetry): the YCB-Video AUC up to 10 cm over the same ground truth, None for files
+    # made before it was recorded.
+    add_err = np.asarray(list(gt_add_errors.values()), dtype=float)
+    has_add = any('add_m' in d for _, d in det_origin)
+    out['add_auc'] = (100.0 * (1.0 - float(np.mean(np.minimum(add_err, 0.1))) / 0.1)
+                      if add_err.size and has_add else None)
+    out['add_under_2cm'] = (float(np.mean(add_err < 0.02)) if add_err.size and has_add else None)
     out['adds_missing'] = missing
     out['_adds_tp_m'] = tp_adds
     return out
@@ -301,6 +311,86 @@ def mask_box_metrics(evals):
     except EvalError:
         return {k + '_mask': None for k in keys}
     return {k + '_mask': m[k] for k in keys}
+
+
+# ---------------------------------------------------------------------------------------------
+# BOP's metrics (Hodan et al., BOP Challenge 2020; bop_toolkit's pose_matching.py and
+# calc_scores.py): MSSD and MSPD errors come in the evaluation files (bop_metrics.h, the
+# appearance's symmetries); here the estimates are matched to the targets and the recalls
+# averaged.
+
+BOP_MSSD_FRACTIONS = [0.05 * k for k in range(1, 11)]   # of the object's diameter
+BOP_MSPD_PIXELS = [5.0 * k for k in range(1, 11)]       # times image width / 640
+
+
+def _bop_match(targets, estimates, error_key, threshold):
+    """bop_toolkit's match_poses for one image and class: the estimates by score (descending,
+    the top len(targets) only: the ViVo task), each matched to the unmatched target of smallest
+    error below the threshold. Returns the number matched."""
+    matched = set()
+    for det in sorted(estimates, key=lambda d: -float(d['score']))[:len(targets)]:
+        errors = det.get(error_key) or {}
+        best, best_error = None, threshold
+        for t in targets:
+            if t in matched:
+                continue
+            e = errors.get(str(t))
+            if e is not None and float(e) < best_error:
+                best, best_error = t, float(e)
+        if best is not None:
+            matched.add(best)
+    return len(matched)
+
+
+def bop_metrics(evals):
+    """AR_MSSD, AR_MSPD (recall averaged over BOP's ten thresholds each) and their mean, pooled
+    and per class name; targets are the ground truth at least 10 % visible (not crowd). VSD is
+    not computed (docs/BENCHMARK.md): 'bop_ar' is the mean of the two. None when a file has no
+    BOP errors (made before they were recorded)."""
+    hits = {'mssd': {}, 'mspd': {}}   # class -> [matched per threshold]
+    targets_per_class = {}
+    for ev in evals:
+        dets = ev.get('detections') or []
+        if dets and 'mssd_m' not in dets[0]:
+            return {'bop_ar': None, 'bop_ar_mssd': None, 'bop_ar_mspd': None, 'bop_per_class': {}}
+        names = {int(c['id']): str(c['name']) for c in ev.get('categories') or []}
+        diameters = {int(c['id']): c.get('diameter_m') for c in ev.get('categories') or []}
+        width = float((ev.get('image_size') or [640, 480])[0]) or 640.0
+        groups = {}
+        for a in ev.get('annotations') or []:
+            if not a.get('iscrowd'):
+                groups.setdefault((a['image_id'], int(a['category_id'])), ([], []))[0].append(a['id'])
+        for d in dets:
+            key = (d['image_id'], int(d['category_id']))
+            if key in groups:
+                groups[key][1].append(d)
+        for (image, cls), (targets, estimates) in groups.items():
+            name = names.get(cls, str(cls))
+            targets_per_class[name] = targets_per_class.get(name, 0) + len(targets)
+            diameter = diameters.get(cls)
+            for kind, key, thresholds in (
+                    ('mssd', 'mssd_m', [f * (diameter or 0.0) for f in BOP_MSSD_FRACTIONS]),
+                    ('mspd', 'mspd_px', [p * width / 640.0 for p in BOP_MSPD_PIXELS])):
+                row = hits[kind].setdefault(name, [0] * len(thresholds))
+                for i, th in enumerate(thresholds):
+                    row[i] += _bop_match(targets, estimates, key, th)
+    total = sum(targets_per_class.values())
+    if not total:
+        return {'bop_ar': None, 'bop_ar_mssd': None, 'bop_ar_mspd': None, 'bop_per_class': {}}
+
+    def ar(kind, names):
+        n = sum(targets_per_class[c] for c in names)
+        if not n:
+            return None
+        per_threshold = [sum(hits[kind].get(c, [0] * 10)[i] for c in names) / n
+                         for i in range(10)]
+        return float(np.mean(per_threshold))
+
+    out = {'bop_ar_mssd': ar('mssd', targets_per_class), 'bop_ar_mspd': ar('mspd', targets_per_class)}
+    out['bop_ar'] = 0.5 * (out['bop_ar_mssd'] + out['bop_ar_mspd'])
+    out['bop_per_class'] = {c: {'targets': targets_per_class[c], 'ar_mssd': ar('mssd', [c]),
+                                'ar_mspd': ar('mspd', [c])} for c in sorted(targets_per_class)}
+    return out
 
 
 # ---------------------------------------------------------------------------------------------
@@ -500,6 +590,7 @@ def method_summary(evals):
     out = {'method': evals[0]['method'] if evals else None, 'scenes': len(evals)}
     out.update(coco_metrics(evals))
     out.update(mask_box_metrics(evals))
+    out.update(bop_metrics(evals))
     out.update(detector_error_figures(evals))
     out.update(trajectory_figures(evals))
     out['class_recall'] = class_recall(evals)
@@ -960,6 +1051,28 @@ def write_report(summary, out_dir, figures, command):
             for n, m in methods.items()]
     md += _table(['method', 'TPs', '< 1 cm', '< 2 cm', 'AUC (10 cm)', 'AUC (2 cm)',
                   'median (mm)'], rows) + ['']
+    md += ['ADD (no symmetry; what ADD-S hides: a can turned about its axis): AUC up to 10 cm '
+           'over the same ground truth, and the share under 2 cm.', '']
+    rows = [[n, _num(m.get('add_auc')), _num(m.get('add_under_2cm'), 3)]
+            for n, m in methods.items()]
+    md += _table(['method', 'ADD AUC (10 cm)', 'ADD < 2 cm'], rows) + ['']
+    md += ['## BOP metrics (MSSD, MSPD; the appearance\'s symmetries)', '',
+           'Recall averaged over BOP\'s thresholds (MSSD 5-50 % of the diameter, MSPD 5-50 px '
+           'at 640 px width), estimates matched to the targets (at least 10 % visible) by '
+           'bop_toolkit\'s rule; AR here is the mean of AR_MSSD and AR_MSPD (VSD not computed).',
+           '']
+    rows = [[n, _num(m.get('bop_ar'), 3), _num(m.get('bop_ar_mssd'), 3),
+             _num(m.get('bop_ar_mspd'), 3)] for n, m in methods.items()]
+    md += _table(['method', 'AR (MSSD, MSPD)', 'AR_MSSD', 'AR_MSPD'], rows) + ['']
+    classes = sorted({c for m in methods.values() for c in (m.get('bop_per_class') or {})})
+    if classes:
+        rows = [[c] + ['%s / %s' % (_num(((m.get('bop_per_class') or {}).get(c) or {})
+                                         .get('ar_mssd'), 2),
+                                    _num(((m.get('bop_per_class') or {}).get(c) or {})
+                                         .get('ar_mspd'), 2))
+                       for m in methods.values()] for c in classes]
+        md += ['Per class, AR_MSSD / AR_MSPD:', '']
+        md += _table(['class'] + list(methods), rows, numeric=False) + ['']
     if any(m['adds_missing'] for m in methods.values()):
         md += ['True positives without an ADD-S value (counted as infinite): %s.' % ', '.join(
             '%s %d' % (n, m['adds_missing']) for n, m in methods.items()), '']

@@ -6,7 +6,11 @@
 //       [--fps 30] [--model-set ycb_video|primitives|FILE.yaml] [--models DIR]
 //       [--detections none|truth|FILE.csv] [--scene-id N] [--ray-bias MIN,MAX]
 //       [--noise T_M,R_RAD] [--seed N] [--camera-poses odometry|none]
-//       [--depth-encoding 16UC1|32FC1] [--quiet]
+//       [--depth-encoding 16UC1|32FC1] [--model-frame auto|model|bop] [--quiet]
+// --model-frame: the frame the folder's object poses (and a --detections CSV's) are in: BOP's
+// (the origin at each model's bounding-box centre, ObjectModel::bop_origin; BOP's own ycbv
+// folders) or the models' own (YCB-Video's meta.mat, converted by ycbv_meta_to_bop.py); auto:
+// BOP's for a BOP folder (depth/), the models' for a YCB-Video one (NNNNNN-depth.png).
 // Hand-held data has no robot: the recording has no /odom and no base; with --camera-poses
 // odometry (the default) the dataset's camera trajectory is on /tf as odom -> optical frame (the
 // ground truth says `odometry: camera_trajectory`), with none there is no pose at all (run the
@@ -40,6 +44,7 @@ struct Options {
   geofusion::TruthDetectorModel detector;
   std::string camera_poses = "odometry";
   std::string depth_encoding = "16UC1";
+  std::string model_frame = "auto";
   bool quiet = false;
 };
 
@@ -49,7 +54,7 @@ void usage() {
                "         [--model-set ycb_video|primitives|FILE.yaml] [--models DIR]\n"
                "         [--detections none|truth|FILE.csv] [--scene-id N] [--ray-bias MIN,MAX]\n"
                "         [--noise T_M,R_RAD] [--seed N] [--camera-poses odometry|none]\n"
-               "         [--depth-encoding 16UC1|32FC1] [--quiet]\n";
+               "         [--depth-encoding 16UC1|32FC1] [--model-frame auto|model|bop] [--quiet]\n";
 }
 
 /// "A,B": two non-negative numbers (A <= B when `ordered`).
@@ -88,6 +93,7 @@ Options parse(int argc, char** argv) {
   args.value("--seed", &o.detector.seed);
   args.value("--camera-poses", &o.camera_poses);
   args.value("--depth-encoding", &o.depth_encoding);
+  args.value("--model-frame", &o.model_frame);
   args.toggle("--quiet", &o.quiet);
   args.parse(argc, argv, usage);
   if (o.in.empty() || o.out_dir.empty())
@@ -97,6 +103,8 @@ Options parse(int argc, char** argv) {
     throw std::runtime_error("--camera-poses must be odometry or none");
   if (o.depth_encoding != "16UC1" && o.depth_encoding != "32FC1")
     throw std::runtime_error("--depth-encoding must be 16UC1 or 32FC1");
+  if (o.model_frame != "auto" && o.model_frame != "model" && o.model_frame != "bop")
+    throw std::runtime_error("--model-frame must be auto, model or bop");
   return o;
 }
 
@@ -162,6 +170,7 @@ struct Importer {
   int unknown_ids = 0, detections = 0;
 
   bool loadInputs(std::string* error);
+  void fromBopFrame();
   bool write(std::string* error);
   void frameTruth(const geofusion::RealFrame& f, const std::vector<int>& index,
                   std::size_t n_objects, geofusion::GroundTruthFrame* g) const;
@@ -202,7 +211,23 @@ bool Importer::loadInputs(std::string* error) {
       return false;
     }
   }
+  if (opt.model_frame == "auto") opt.model_frame = seq.format == "bop" ? "bop" : "model";
+  if (opt.model_frame == "bop") fromBopFrame();
   return true;
+}
+
+// BOP's poses are of each model's BOP frame (origin at ObjectModel::bop_origin): brought to the
+// model's own frame, T_cam_obj = T_cam_bop x Translation(-bop_origin). Unknown ids stay as they
+// are (they are reported where they are used).
+void Importer::fromBopFrame() {
+  auto convert = [this](int obj_id, Eigen::Isometry3d* T) {
+    if (const geofusion::ObjectModel* model = models.findById(obj_id))
+      *T = *T * Eigen::Translation3d(-model->bop_origin);
+  };
+  for (geofusion::RealFrame& f : seq.frames)
+    for (auto& o : f.objects) convert(o.obj_id, &o.T_cam_obj);
+  for (auto& frame : estimates)
+    for (auto& e : frame.second) convert(e.obj_id, &e.T_cam_obj);
 }
 
 void Importer::frameTruth(const geofusion::RealFrame& f, const std::vector<int>& index,
@@ -360,9 +385,11 @@ bool Importer::write(std::string* error) {
     return false;
   }
   std::printf(
-      "[import_dataset] %s (%s, hand-held, odometry: %s): %zu frames, %zu objects, %d "
-      "detections%s -> %s, %s\n",
-      opt.name.c_str(), seq.format.c_str(), gt.odometry.c_str(), seq.frames.size(),
+      "[import_dataset] %s (%s, poses in the %s frame, hand-held, odometry: %s): %zu frames, "
+      "%zu objects, %d detections%s -> %s, %s\n",
+      opt.name.c_str(), seq.format.c_str(),
+      opt.model_frame == "bop" ? "BOP model" : "models' own", gt.odometry.c_str(),
+      seq.frames.size(),
       gt.scene.objects.size(), detections,
       unknown_ids ? (", " + std::to_string(unknown_ids) + " of unknown object ids skipped").c_str()
                   : "",

@@ -6,7 +6,8 @@
 //       [--models DIR] [--keyframe-every N]
 //       [--rgb-topic T] [--depth-topic T] [--camera-info-topic T] [--detections-topic T]
 //       [--odom-frame odom]
-//       [--background FILE.bt] [--initial-map PREFIX] [--save-map PREFIX] [--quiet]
+//       [--background FILE.bt] [--initial-map PREFIX] [--save-map PREFIX]
+//       [--bop-results FILE.csv [--bop-scene-id N]] [--quiet]
 //   run_offline [--params FILE.yaml] [--set KEY=VALUE]... --print-params
 // Frames are made and judged as the estimator node makes and judges them (the same synchroniser,
 // EstimatorPipeline's admission, checks and cap). Nothing is written unless the run succeeds:
@@ -15,12 +16,15 @@
 // The configuration is the nodes' (config/config.h): the file of --params, then --set and the
 // shorthands (--method = method, --model-set = model_set.name, --models = model_set.dir,
 // --keyframe-every = keyframes.every_n_frames) in the order given; it is written into the
-// results.
+// results. --bop-results also writes the run as BOP results (bop_results.h: every keyframe's map
+// objects in view, in BOP's model frame; scene id --bop-scene-id, image id the keyframe index,
+// object id the class id).
 #include "command_line.h"
 #include "config_option.h"
 #include "geofusion/common/ingestion.h"
 #include "geofusion/common/robot_names.h"
 #include "geofusion/config/config.h"
+#include "geofusion/estimation/bop_results.h"
 #include "geofusion/estimation/run_results.h"
 #include "geofusion/estimation/scene_estimator.h"
 #include "geofusion/ros/estimator_pipeline.h"
@@ -68,6 +72,8 @@ struct Options {
   std::string background;   ///< .bt file of the background OctoMap; empty: none
   std::string save_map;     ///< prefix to save the final map under (map_store.h); empty: none
   std::string initial_map;  ///< a saved map to continue; empty: none
+  std::string bop_results;  ///< BOP results CSV to write; empty: none
+  int bop_scene_id = 0;
   bool quiet = false;
 };
 
@@ -78,7 +84,8 @@ void usage() {
          "         [--model-set primitives|ycb_video|FILE.yaml] [--models DIR]\n"
          "         [--keyframe-every N] [--rgb-topic T] [--depth-topic T] [--camera-info-topic T]\n"
          "         [--detections-topic T] [--odom-frame odom] [--background FILE.bt]\n"
-         "         [--initial-map PREFIX] [--save-map PREFIX] [--quiet]\n"
+         "         [--initial-map PREFIX] [--save-map PREFIX]\n"
+         "         [--bop-results FILE.csv [--bop-scene-id N]] [--quiet]\n"
          "       run_offline [--params FILE.yaml] [--set KEY=VALUE]... --print-params\n";
 }
 
@@ -101,6 +108,8 @@ Options parse(int argc, char** argv) {
   args.value("--background", &o.background);
   args.value("--save-map", &o.save_map);
   args.value("--initial-map", &o.initial_map);
+  args.value("--bop-results", &o.bop_results);
+  args.value("--bop-scene-id", &o.bop_scene_id);
   args.toggle("--quiet", &o.quiet);
   args.parse(argc, argv, usage);
   if (!o.print_params && (o.bag.empty() || o.out.empty()))
@@ -218,7 +227,8 @@ std::string noKeyframeReport(const Options& o, const rosbag::Bag& bag, const Sta
 // The output paths, checked before the run: false, having said why, when one cannot be written.
 bool checkOutputs(const Options& opt, std::string* error) {
   for (const std::string& out :
-       {opt.out, opt.background, opt.save_map.empty() ? "" : opt.save_map + ".yaml"}) {
+       {opt.out, opt.background, opt.save_map.empty() ? "" : opt.save_map + ".yaml",
+        opt.bop_results}) {
     if (!out.empty() && !checkWritable(out, error)) {
       std::cerr << "run_offline: " << *error << "; nothing was run\n";
       return false;
@@ -459,6 +469,14 @@ bool writeOutputs(const Options& opt, geofusion::EstimatorPipeline* pipeline,
     if (pipeline->background()) std::remove(opt.background.c_str());
     std::cerr << "run_offline: " << *error << "; nothing written\n";
     return false;
+  }
+  if (!opt.bop_results.empty()) {
+    BopIds ids;
+    ids.scene_id = opt.bop_scene_id;
+    if (!writeBopResults(opt.bop_results, *results, pipeline->intrinsics(), ids, error)) {
+      std::cerr << "run_offline: --bop-results: " << *error << "\n";
+      return false;
+    }
   }
   if (!opt.save_map.empty()) {
     RunResults map = *results;

@@ -74,6 +74,13 @@ struct TrackObservation {
 struct ObjectTrack {
   int id = -1;
   std::shared_ptr<const ObjectModel> model;
+  /// Set while its detections agree about the angle about the shape's axis (symmetry_axis.h):
+  /// the model with its appearance symmetry, which stage I and II are given instead.
+  std::shared_ptr<const ObjectModel> appearance_model;
+  /// The model whose symmetry the optimisation uses: appearance_model when set, else model.
+  const ObjectModel* symmetryModel() const {
+    return appearance_model ? appearance_model.get() : model.get();
+  }
   Eigen::Isometry3d T_stage_one = Eigen::Isometry3d::Identity();  ///< stage I / initial
   Eigen::Isometry3d T_refined = Eigen::Isometry3d::Identity();    ///< stage II
   std::vector<TrackObservation> observations;

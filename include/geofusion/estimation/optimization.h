@@ -50,6 +50,13 @@ struct StageOneConfig {
   double min_odometry_variance_factor = 0.01;
   double max_object_variance_factor = 100.0;
   double gate_chi2 = 22.5;
+  /// Issue 51 (symmetry_axis.h): the angle about a shape's continuous axis that the appearance
+  /// does not share (a labelled can) follows the detections, their weighted circular mean,
+  /// where they agree: mean resultant length (of the angles times the appearance's turns about
+  /// the axis) at least axis_agreement_min (0.7: a circular spread of about 48 degrees). Off or
+  /// scattered: the axis stays free, as for an untextured can.
+  bool axis_from_detections = true;
+  double axis_agreement_min = 0.7;
 };
 
 /// One object measurement z_t^k in stage I: keyframe t observes object j at T_cam_obj.

@@ -15,6 +15,7 @@
 #include "geofusion/estimation/optimization.h"
 #include "geofusion/estimation/relations.h"
 #include "geofusion/estimation/relocalisation.h"
+#include "geofusion/estimation/symmetry_axis.h"
 #include "geofusion/model/object_model.h"
 #include "geofusion/render/consistency.h"
 
@@ -258,6 +259,8 @@ class SceneEstimator {
   /// Tracks in the map: confirmed ones (all for methods without false-positive removal).
   std::vector<std::size_t> reportedTracks() const;
   bool stageOneDue(int t) const;
+  /// Before stage I: the angle about a can's axis from its detections where they agree.
+  void settleSymmetryAxis(Track* track);
   StageReport runStageOne();
   void adaptNoise(const std::vector<std::size_t>& reported,
                   const std::vector<Eigen::Isometry3d>& objects,
@@ -284,6 +287,7 @@ class SceneEstimator {
   DetectionMonitor monitor_;
   std::unique_ptr<HullCollider> collider_;
   std::vector<Track> tracks_;
+  AppearanceModels appearance_models_;  ///< the models with their appearance symmetry
   int next_id_ = 0;
   std::vector<Eigen::Isometry3d> T_map_cam_, T_odom_cam_;
   double odometry_variance_ = 1.0;  ///< stage I odometry variance factor (noise adaptation)

@@ -13,6 +13,7 @@
 
 #include <Eigen/Geometry>
 
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -108,6 +109,15 @@ struct DetectionBox {
   /// ADD-S (m) against each same-class, not ignored ground truth box of the image that its box
   /// overlaps at adds_min_iou or more: (ground truth id, value).
   std::vector<std::pair<int, double>> adds_m;
+  /// ADD (m, no symmetry) against the same ground truth boxes as adds_m.
+  std::vector<std::pair<int, double>> add_m;
+  /// BOP's errors (bop_metrics.h; the appearance's symmetries) against every same-class ground
+  /// truth of the image that is not ignored, whatever the boxes' overlap (BOP matches by error).
+  struct BopError {
+    int truth = 0;  ///< ground truth id
+    double mssd_m = 0.0, mspd_px = 0.0;
+  };
+  std::vector<BopError> bop;
 };
 
 struct GraphObject {
@@ -135,6 +145,8 @@ struct RunEvaluation {
   EvaluationConfig evaluation_config;  ///< the protocol's own settings
   int image_width = 0, image_height = 0;
   std::vector<std::pair<int, std::string>> categories;  ///< (class id, name) of the model set
+  /// BOP's object diameters (m, of the evaluation points) by class id: its MSSD thresholds.
+  std::map<int, double> diameters_m;
   std::vector<std::pair<int, double>> images;           ///< (keyframe index, stamp)
   int unmatched_keyframes = 0;  ///< results keyframes without a ground-truth frame
   std::vector<GroundTruthBox> ground_truth;

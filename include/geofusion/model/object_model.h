@@ -20,6 +20,11 @@ struct Symmetry {
   std::vector<Eigen::Quaterniond> rotations;        ///< kDiscrete: non-identity symmetries
 };
 
+/// How many of `symmetry`'s rotations (identity included) turn about `axis` (either direction,
+/// within 3 degrees): 1 for none, 2 for a single 180-degree turn about it; 0 for a continuous
+/// symmetry about it (every angle).
+int orderAbout(const Symmetry& symmetry, const Eigen::Vector3d& axis);
+
 /// What a depth camera's light does on the object's surface (the sensor models of the data
 /// generator; the estimator does not use it): diffuse returns it, dark absorbs it, specular
 /// mirrors it away, transparent lets it through.
@@ -34,7 +39,20 @@ struct ObjectModel {
   TriangleMesh mesh;
   std::string mesh_path;                ///< file the mesh came from; empty for primitives
   std::vector<Eigen::Vector3f> points;  ///< evaluation points (ADD/ADD-S), model frame
+  /// The shape's symmetries: the rotations the depth (and the collision shape) cannot tell apart.
   Symmetry symmetry;
+  /// The appearance's: the rotations a detector that sees the texture cannot tell apart (BOP's
+  /// models_info.json symmetries; model-set key `appearance_symmetry`, default `symmetry`). A can
+  /// is continuous in shape and none (tuna fish) or 180 degrees (master chef) in appearance: the
+  /// estimator then takes the angle about its axis from the detections where they agree, and the
+  /// evaluation's BOP metrics score with these.
+  Symmetry appearance_symmetry;
+  /// Where BOP's model frame has its origin, in this model's frame: BOP's YCB-Video models are
+  /// the YCB-Video meshes with the origin moved to the centre of their bounding box, and BOP's
+  /// poses are of that frame (T_cam_bop = T_cam_obj x Translation(bop_origin)). Model-set key
+  /// `bop_origin`: [x, y, z] in metres, or `box_centre` (of the evaluation points when given,
+  /// else of the mesh); default the model's own origin.
+  Eigen::Vector3d bop_origin = Eigen::Vector3d::Zero();
   SurfaceFeatures features;
   Eigen::Vector3f extents = Eigen::Vector3f::Zero();  ///< axis-aligned size, metres
   /// The mesh's axis-aligned box, model frame (ModelSet::add fills it; empty: boxOf measures the

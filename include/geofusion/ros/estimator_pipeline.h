@@ -86,6 +86,8 @@ class EstimatorPipeline {
 
   SceneEstimator& estimator() { return *estimator_; }
   const SceneEstimator& estimator() const { return *estimator_; }
+  /// The pinhole intrinsics of the last camera_info used (the BOP results' view test).
+  const PinholeIntrinsics& intrinsics() const { return camera_.K(); }
   /// The background map's worker, or null when the pipeline has none.
   BackgroundWorker* background() { return background_.get(); }
   const DetectionTally& tally() const { return tally_; }  ///< detections used and skipped
