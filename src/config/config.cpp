@@ -328,6 +328,13 @@ class Table {
     flag("association.joint_assignment",
          "one Hungarian assignment per keyframe (false: the paper's greedy order)",
          [f](GeoFusionConfig& c) { return &f(c)->joint_assignment; });
+    flag("association.class_by_consistency",
+         "GeoFusion: a look-alike reported in place of an object: the depth decides its class "
+         "(false: a new object)",
+         [f](GeoFusionConfig& c) { return &f(c)->class_by_consistency; });
+    real("association.class_vote_weight", 0, 10,
+         "... each detection of a class adds this to its support (the votes as a prior)",
+         [f](GeoFusionConfig& c) { return &f(c)->class_vote_weight; });
   }
   void stageOne() {
     auto f = [](GeoFusionConfig& c) { return &c.estimator.stage_one; };

@@ -44,16 +44,16 @@ std::string bopResultsCsv(const RunResults& results, const PinholeIntrinsics& K,
                     "%d,%d,%d,%.6f,%.9f %.9f %.9f %.9f %.9f %.9f %.9f %.9f %.9f,%.4f %.4f %.4f,"
                     "%.6f\n",
                     ids.scene_id, ids.imageOf(k.keyframe), ids.objectOf(*o.model), o.existence,
-                    R(0, 0), R(0, 1), R(0, 2), R(1, 0), R(1, 1), R(1, 2), R(2, 0), R(2, 1),
-                    R(2, 2), t.x(), t.y(), t.z(), time_s);
+                    R(0, 0), R(0, 1), R(0, 2), R(1, 0), R(1, 1), R(1, 2), R(2, 0), R(2, 1), R(2, 2),
+                    t.x(), t.y(), t.z(), time_s);
       out << buffer;
     }
   }
   return out.str();
 }
 
-bool writeBopResults(const std::string& path, const RunResults& results,
-                     const PinholeIntrinsics& K, const BopIds& ids, std::string* error) {
+bool writeBopResults(const std::string& path, const RunResults& results, const PinholeIntrinsics& K,
+                     const BopIds& ids, std::string* error) {
   const std::string text = bopResultsCsv(results, K, ids);
   return writeFileAtomically(
       path,

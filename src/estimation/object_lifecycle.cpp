@@ -135,6 +135,26 @@ bool mappedTwice(const ObjectTrack& a, const Eigen::Isometry3d& T_a, const Objec
   return depth >= needed;
 }
 
+void changeClass(ObjectTrack* track, const std::shared_ptr<const ObjectModel>& model) {
+  track->model = model;
+  track->appearance_model.reset();
+  const Eigen::AlignedBox3f box = boxOf(*model);
+  track->box_centre = box.center().cast<double>();
+  track->box_half = (0.5f * box.diagonal()).cast<double>();
+  ++track->class_changes;
+}
+
+bool challengerWins(ObjectTrack* track, const std::string& other, double f_other, double f_held,
+                    double vote_weight) {
+  ObjectTrack::ClassEvidence& held = track->class_evidence[track->model->name];
+  ObjectTrack::ClassEvidence& challenger = track->class_evidence[other];
+  held.consistency += std::max(0.0, f_held);
+  challenger.consistency += std::max(0.0, f_other);
+  ++challenger.votes;
+  return challenger.consistency + vote_weight * challenger.votes >
+         held.consistency + vote_weight * held.votes;
+}
+
 int coMeasuredKeyframes(const ObjectTrack& a, const ObjectTrack& b) {
   int n = 0;
   for (const TrackObservation& x : a.observations) {

@@ -3,10 +3,10 @@
 #include "geofusion/estimation/depth_refinement.h"
 
 #include "geofusion/estimation/association.h"
-#include "geofusion/estimation/symmetry_axis.h"
 #include "geofusion/estimation/factors/contact_factor.h"
 #include "geofusion/estimation/factors/pose_block.h"
 #include "geofusion/estimation/factors/relative_pose_factor.h"
+#include "geofusion/estimation/symmetry_axis.h"
 
 #include "geofusion/common/ceres_compat.h"
 
@@ -147,7 +147,8 @@ Eigen::Matrix3d alignToReference(const Symmetry& symmetry, const Eigen::Matrix3d
   if (symmetry.type != Symmetry::Type::kContinuous)
     return closestSymmetricEquivalent(symmetry, R_reference, R_measured);
   const Eigen::Vector3d a = symmetry.axis.normalized();
-  return R_measured * Eigen::AngleAxisd(axialOffset(a, R_reference, R_measured), a).toRotationMatrix();
+  return R_measured *
+         Eigen::AngleAxisd(axialOffset(a, R_reference, R_measured), a).toRotationMatrix();
 }
 
 void FoldedMeasurements::add(const Eigen::Isometry3d& T_map_cam, const StageOneMeasurement& m,

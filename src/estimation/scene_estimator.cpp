@@ -65,6 +65,7 @@ MethodStages stagesOf(Method method) {
       s.geometric_consistency = s.false_positive_removal = true;
       s.stage_one = s.relations_and_stage_two = s.depth_refinement = true;
       s.stage_one_noise_adaptation = s.free_space_removal = s.relocalisation = true;
+      s.class_by_consistency = true;
       break;
   }
   return s;
@@ -79,6 +80,8 @@ const std::pair<DetectionDecision, const char*> kDecisionNames[] = {
     {DetectionDecision::kAssociated, "associated"},
     {DetectionDecision::kCandidate, "candidate"},
     {DetectionDecision::kRemoved, "removed"},
+    {DetectionDecision::kClassKept, "class_kept"},
+    {DetectionDecision::kClassChanged, "class_changed"},
 };
 // The refinement a method runs: the configured one, on only when its stages include it.
 DepthRefinementConfig refinementOf(const EstimatorConfig& config, const MethodStages& stages) {
@@ -278,10 +281,11 @@ KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
   t0 = Clock::now();
   Relocalisation relocalisation;
   if (stages_.relocalisation) relocalisation = relocaliseCamera(detections);
-  std::vector<int> started;
-  std::vector<int> detection_object = stages_.map_is_keyframe_detections
-                                          ? mapKeyframeDetections(kf, detections, t)
-                                          : associateDetections(kf, detections, t, &started);
+  std::vector<int> started, contests(kf.detections.size(), 0);
+  std::vector<int> detection_object =
+      stages_.map_is_keyframe_detections
+          ? mapKeyframeDetections(kf, detections, t)
+          : associateDetections(kf, detections, t, &started, &contests);
   const std::vector<int> assigned = detection_object;
   timings.association_ms = msSince(t0);
 
@@ -322,7 +326,7 @@ KeyframeResult SceneEstimator::addKeyframe(const Keyframe& kf) {
   if (stages_.relations_and_stage_two) stage_two = runRelationsAndStageTwo(&kf, &timings);
 
   KeyframeResult out = result(t, kf.stamp_s);
-  out.detections = reportDetections(kf, detections, assigned, started, removed);
+  out.detections = reportDetections(kf, detections, assigned, started, removed, contests);
   out.detection_warning = monitor_.add(out.detections);
   out.removed_ids = std::move(removed);
   out.removals = std::move(removals);
@@ -442,7 +446,7 @@ SceneEstimator::ScoredDetections SceneEstimator::scoreDetections(const Keyframe&
 std::vector<DetectionReport> SceneEstimator::reportDetections(
     const Keyframe& kf, const ScoredDetections& detections,
     const std::vector<int>& detection_object, const std::vector<int>& started,
-    const std::vector<int>& removed) const {
+    const std::vector<int>& removed, const std::vector<int>& contests) const {
   auto contains = [](const std::vector<int>& v, int x) {
     return std::find(v.begin(), v.end(), x) != v.end();
   };
@@ -473,6 +477,9 @@ std::vector<DetectionReport> SceneEstimator::reportDetections(
         track != tracks_.end() && (track->confirmed || !stages_.false_positive_removal);
     if (contains(removed, rep.object) || track == tracks_.end())
       rep.decision = DetectionDecision::kRemoved;
+    else if (contests[k] > 0)
+      rep.decision =
+          contests[k] == 2 ? DetectionDecision::kClassChanged : DetectionDecision::kClassKept;
     else if (contains(started, rep.object))
       rep.decision = in_map ? DetectionDecision::kNewObject : DetectionDecision::kNewCandidate;
     else
@@ -508,10 +515,12 @@ std::vector<int> SceneEstimator::mapKeyframeDetections(const Keyframe& kf,
 // per object), or starts a new object. Returns each detection's object id (-1: none).
 std::vector<int> SceneEstimator::associateDetections(const Keyframe& kf,
                                                      const ScoredDetections& detections, int t,
-                                                     std::vector<int>* started) {
+                                                     std::vector<int>* started,
+                                                     std::vector<int>* contests) {
   const Eigen::Isometry3d& T_map_cam = T_map_cam_.back();
-  const std::vector<int> assignment =
+  std::vector<int> assignment =
       associate(associationLikelihood(kf, detections), config_.association);
+  const std::vector<int> contested = contestClasses(kf, detections, t, &assignment);
   std::vector<int> detection_object(kf.detections.size(), -1);
   for (std::size_t r = 0; r < detections.usable.size(); ++r) {
     const std::size_t k = static_cast<std::size_t>(detections.usable[r]);
@@ -520,16 +529,61 @@ std::vector<int> SceneEstimator::associateDetections(const Keyframe& kf,
     if (assignment[r] < 0) started->push_back(next_id_);
     Track& tr = assignment[r] < 0 ? startTrack(detections.models[k], T_map_cam * T_cam_obj, t)
                                   : tracks_[static_cast<std::size_t>(assignment[r])];
-    tr.observations.push_back(obs);
+    detection_object[k] = tr.id;
+    (*contests)[k] = contested[r];
     tr.last_keyframe = t;
+    if (contested[r] == 1) continue;  // the depth kept the object's class: not its measurement
+    if (contested[r] == 0) ++tr.class_evidence[tr.model->name].votes;  // (a challenger's: counted)
+    tr.observations.push_back(obs);
     // Without stage I (R-Front): the pose of the most consistent measurement, through odometry.
     if (!stages_.stage_one && obs.consistency >= tr.best_consistency) {
       tr.T_stage_one = tr.T_refined = T_map_cam * T_cam_obj;
     }
     tr.best_consistency = std::max(tr.best_consistency, obs.consistency);
-    detection_object[k] = tr.id;
   }
   return detection_object;
+}
+
+// Issue 51: a look-alike reported in place of an object (the detection and the object would be
+// one object mapped twice, mappedTwice) is the detector naming it otherwise. Both models are
+// scored against this keyframe's depth, each at its pose, and the object keeps its class or takes
+// the detection's by their support (challengerWins); a class change is logged in the
+// detection's decision (class_changed) and counted on the object.
+std::vector<int> SceneEstimator::contestClasses(const Keyframe& kf,
+                                                const ScoredDetections& detections, int t,
+                                                std::vector<int>* assignment) {
+  std::vector<int> out(detections.usable.size(), 0);
+  const AssociationConfig& c = config_.association;
+  if (!c.class_by_consistency || !stages_.class_by_consistency || !kf.depth.data) return out;
+  std::vector<char> taken(tracks_.size(), 0);
+  for (int j : *assignment)
+    if (j >= 0) taken[static_cast<std::size_t>(j)] = 1;
+  const Eigen::Isometry3d& T_map_cam = T_map_cam_.back();
+  for (std::size_t r = 0; r < detections.usable.size(); ++r) {
+    if ((*assignment)[r] >= 0) continue;
+    const std::size_t k = static_cast<std::size_t>(detections.usable[r]);
+    const std::shared_ptr<const ObjectModel>& model = detections.models[k];
+    const Eigen::Isometry3d T_map_det = T_map_cam * detections.pose(k);
+    const Track as_object = makeTrack(-1, model, T_map_det, t);
+    for (std::size_t j = 0; j < tracks_.size(); ++j) {
+      Track& tr = tracks_[j];
+      if (taken[j] || tr.model->name == model->name ||
+          (reportedPose(tr).translation() - T_map_det.translation()).norm() > 0.15 ||
+          !mappedTwice(as_object, T_map_det, tr, reportedPose(tr), c, collider_.get()))
+        continue;
+      const double f_held =
+          scorer_->score(tr.model, T_map_cam.inverse() * reportedPose(tr), kf.depth, kf.K).score;
+      taken[j] = 1;
+      (*assignment)[r] = static_cast<int>(j);
+      out[r] = 1;
+      if (challengerWins(&tr, model->name, detections.score[k], f_held, c.class_vote_weight)) {
+        changeClass(&tr, model);
+        out[r] = 2;
+      }
+      break;
+    }
+  }
+  return out;
 }
 
 // Likelihood of detection r (rows: usable detections) being object j: label indicator x score x

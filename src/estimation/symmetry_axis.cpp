@@ -26,7 +26,8 @@ AxialAgreement axialAgreement(const ObjectModel& model, const Eigen::Matrix3d& R
   double c = 0.0, s = 0.0, w_sum = 0.0;
   for (const AxialSample& sample : samples) {
     if (!(sample.weight > 0.0) || !sample.R_map_obj.allFinite()) continue;
-    const double theta = out.order * axialOffset(model.symmetry.axis, R_reference, sample.R_map_obj);
+    const double theta =
+        out.order * axialOffset(model.symmetry.axis, R_reference, sample.R_map_obj);
     c += sample.weight * std::cos(theta);
     s += sample.weight * std::sin(theta);
     w_sum += sample.weight;
@@ -41,8 +42,8 @@ AxialAgreement axialAgreement(const ObjectModel& model, const Eigen::Matrix3d& R
 
 Eigen::Matrix3d turnedToAgreement(const ObjectModel& model, const Eigen::Matrix3d& R_reference,
                                   const AxialAgreement& agreement) {
-  return R_reference *
-         Eigen::AngleAxisd(-agreement.mean_rad, model.symmetry.axis.normalized()).toRotationMatrix();
+  return R_reference * Eigen::AngleAxisd(-agreement.mean_rad, model.symmetry.axis.normalized())
+                           .toRotationMatrix();
 }
 
 std::shared_ptr<const ObjectModel> AppearanceModels::of(

@@ -23,8 +23,9 @@ std::vector<Eigen::Isometry3d> symmetryTransformations(const Symmetry& symmetry,
   } else if (symmetry.type == Symmetry::Type::kContinuous) {
     const int steps = std::max(2, continuous_steps);
     for (int i = 1; i < steps; ++i)
-      out.push_back(about_centre(
-          Eigen::AngleAxisd(2.0 * M_PI * i / steps, symmetry.axis.normalized()).toRotationMatrix()));
+      out.push_back(
+          about_centre(Eigen::AngleAxisd(2.0 * M_PI * i / steps, symmetry.axis.normalized())
+                           .toRotationMatrix()));
   }
   return out;
 }
@@ -82,20 +83,20 @@ double minMaxOverSymmetries(const BopModel& model, const Eigen::Isometry3d& T_es
 double mssdError(const BopModel& model, const Eigen::Isometry3d& T_est,
                  const Eigen::Isometry3d& T_true) {
   if (model.points.empty()) return std::numeric_limits<double>::infinity();
-  return minMaxOverSymmetries(model, T_est, T_true,
-                              [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-                                return (a - b).norm();
-                              });
+  return minMaxOverSymmetries(
+      model, T_est, T_true,
+      [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return (a - b).norm(); });
 }
 
 double mspdError(const BopModel& model, const Eigen::Isometry3d& T_est,
                  const Eigen::Isometry3d& T_true, const PinholeIntrinsics& K) {
   if (model.points.empty()) return std::numeric_limits<double>::infinity();
-  return minMaxOverSymmetries(
-      model, T_est, T_true, [&K](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-        if (!(a.z() > 0.0) || !(b.z() > 0.0)) return std::numeric_limits<double>::infinity();
-        return (K.project(a) - K.project(b)).norm();
-      });
+  return minMaxOverSymmetries(model, T_est, T_true,
+                              [&K](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+                                if (!(a.z() > 0.0) || !(b.z() > 0.0))
+                                  return std::numeric_limits<double>::infinity();
+                                return (K.project(a) - K.project(b)).norm();
+                              });
 }
 
 }  // namespace geofusion

@@ -1,12 +1,14 @@
 #include "geofusion/evaluation/run_evaluation.h"
 
 #include "geofusion/evaluation/trajectory_metrics.h"
+#include "geofusion/evaluation/vsd.h"
 
 #include "geofusion/common/atomic_file.h"
 #include "geofusion/estimation/relations.h"
 #include "geofusion/evaluation/bop_metrics.h"
 #include "geofusion/evaluation/evaluation.h"
 #include "geofusion/evaluation/metrics.h"
+#include "geofusion/render/renderer.h"
 #include "geofusion/simulation/clutter_scene.h"
 
 #include <yaml-cpp/yaml.h>
@@ -134,9 +136,18 @@ void describeRun(const GroundTruth& gt, const RunResults& results, RunEvaluation
 
 // One keyframe's images for COCO: the true objects' projected boxes (crowd when mostly hidden) and
 // the estimate's boxes, each with its ADD-S against the same-class truths its box overlaps.
-// BOP's view of each true object's model (bop_metrics.h), made once per class.
+// BOP's view of each true object's model (bop_metrics.h), made once per class, and the VSD
+// scorer with its test image (the true scene of the keyframe, rendered).
 class BopModels {
  public:
+  explicit BopModels(const EvaluationConfig& config, RunEvaluation* ev) {
+    if (!config.vsd) return;
+    auto renderer = std::make_shared<OffscreenRenderer>();
+    if (renderer->ok())
+      vsd_ = std::make_unique<VsdScorer>(renderer);
+    else
+      ev->warnings.push_back("VSD not computed: no OSMesa context (" + renderer->error() + ")");
+  }
   const BopModel& of(const ObjectModel& model, RunEvaluation* ev) {
     auto it = models_.find(model.name);
     if (it == models_.end()) {
@@ -145,9 +156,29 @@ class BopModels {
     }
     return it->second;
   }
+  /// The keyframe's test depth: its present true objects (and the table of a generated scene)
+  /// seen from the true camera.
+  void setScene(const GroundTruth& gt, const GroundTruthFrame& f) {
+    if (!vsd_) return;
+    if (!table_) table_ = std::make_unique<ObjectModel>(gt.scene.table.model());
+    const Eigen::Isometry3d T_cam_map = f.T_map_optical.inverse();
+    std::vector<PosedObject> scene;
+    if (gt.platform == "robot") scene.push_back({table_.get(), T_cam_map * gt.scene.table.pose()});
+    for (const SceneObject& o : gt.scene.objects)
+      if (o.presentAt(f.index)) scene.push_back({o.model.get(), T_cam_map * o.T_world_obj});
+    scene_ok_ = vsd_->setScene(gt.intrinsics, scene);
+  }
+  std::vector<double> vsd(const ObjectModel& model, const Eigen::Isometry3d& T_est,
+                          const Eigen::Isometry3d& T_true, double diameter_m) {
+    return vsd_ && scene_ok_ ? vsd_->errors(model, T_est, T_true, diameter_m)
+                             : std::vector<double>{};
+  }
 
  private:
   std::map<std::string, BopModel> models_;
+  std::unique_ptr<VsdScorer> vsd_;
+  std::unique_ptr<ObjectModel> table_;
+  bool scene_ok_ = false;
 };
 
 // The estimate's errors against the image's ground truth (from `first_truth` on): ADD-S and ADD
@@ -162,7 +193,8 @@ void scoreEstimate(const GroundTruth& gt, std::size_t first_truth,
     const Eigen::Isometry3d& T_true = truth_poses[g - first_truth];
     const ObjectModel& truth_model = *gt.scene.objects[static_cast<std::size_t>(t.object)].model;
     const BopModel& m = bop->of(truth_model, ev);
-    d->bop.push_back({t.id, mssdError(m, T, T_true), mspdError(m, T, T_true, gt.intrinsics)});
+    d->bop.push_back({t.id, mssdError(m, T, T_true), mspdError(m, T, T_true, gt.intrinsics),
+                      bop->vsd(truth_model, T, T_true, m.diameter_m)});
     if (boxIou(t.box, d->box) < config.adds_min_iou) continue;
     d->adds_m.emplace_back(t.id, (*adds)(o.model->points, T, T_true));
     d->add_m.emplace_back(t.id, addError(o.model->points, T, T_true));
@@ -202,6 +234,7 @@ void evaluateKeyframe(const GroundTruth& gt, const GroundTruthFrame& f, const Ke
     truth_poses.push_back(T);
   }
   const Eigen::Isometry3d T_cam_map = k.T_map_cam.inverse();
+  if (!k.objects.empty()) bop->setScene(gt, f);
   for (const ObjectEstimate& o : k.objects) {
     const Eigen::Isometry3d T = T_cam_map * o.T_map_obj;
     const Box2d box = projectedBox(o.model->points, T, K);
@@ -592,8 +625,12 @@ bool evaluateRun(const GroundTruth& gt, const RunResults& results, const Evaluat
   describeRun(gt, results, &ev);
   const KeyframeMatcher frames(gt, config.stamp_tolerance_s);
   AddsEvaluator adds;
-  BopModels bop;
+  BopModels bop(config, &ev);
   for (const KeyframeResult& k : results.keyframes) {
+    for (const DetectionReport& d : k.detections) {
+      ev.class_changes += d.decision == DetectionDecision::kClassChanged;
+      ev.classes_kept += d.decision == DetectionDecision::kClassKept;
+    }
     const GroundTruthFrame* f = frames.at(k.stamp_s);
     if (!f || f->visible_fraction.size() != gt.scene.objects.size()) {
       ++ev.unmatched_keyframes;
@@ -680,13 +717,14 @@ nlohmann::json detectionsJson(const RunEvaluation& e) {
   using nlohmann::json;
   json out = json::array();
   for (const DetectionBox& d : e.detections) {
-    json adds = json::object(), add = json::object(), mssd = json::object(),
-         mspd = json::object();
+    json adds = json::object(), add = json::object(), mssd = json::object(), mspd = json::object(),
+         vsd = json::object();
     for (const auto& a : d.adds_m) adds[std::to_string(a.first)] = a.second;
     for (const auto& a : d.add_m) add[std::to_string(a.first)] = a.second;
     for (const auto& b : d.bop) {
       mssd[std::to_string(b.truth)] = b.mssd_m;
       mspd[std::to_string(b.truth)] = std::isfinite(b.mspd_px) ? json(b.mspd_px) : json(nullptr);
+      if (!b.vsd.empty()) vsd[std::to_string(b.truth)] = b.vsd;
     }
     out.push_back({{"id", d.id},
                    {"image_id", d.image},
@@ -698,6 +736,7 @@ nlohmann::json detectionsJson(const RunEvaluation& e) {
                    {"add_m", add},
                    {"mssd_m", mssd},
                    {"mspd_px", mspd}});
+    if (e.evaluation_config.vsd) out.back()["vsd"] = vsd;  // per truth, one error per tau
   }
   return out;
 }
@@ -767,7 +806,8 @@ nlohmann::json evaluationConfigJson(const EvaluationConfig& c) {
           {"well_seen_min_visible", c.well_seen_min_visible},
           {"lost_absence_keyframes", c.lost_absence_keyframes},
           {"persistent_min_keyframes", c.persistent_min_keyframes},
-          {"phantom_match_m", c.phantom_match_m}};
+          {"phantom_match_m", c.phantom_match_m},
+          {"vsd", c.vsd}};
 }
 
 // Each stage's time, keyframe by keyframe.
@@ -829,10 +869,10 @@ bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::s
   j["categories"] = json::array();
   for (const auto& c : e.categories) {
     const auto d = e.diameters_m.find(c.first);
-    j["categories"].push_back({{"id", c.first},
-                               {"name", c.second},
-                               {"diameter_m", d == e.diameters_m.end() ? json(nullptr)
-                                                                       : json(d->second)}});
+    j["categories"].push_back(
+        {{"id", c.first},
+         {"name", c.second},
+         {"diameter_m", d == e.diameters_m.end() ? json(nullptr) : json(d->second)}});
   }
   j["images"] = json::array();
   for (const auto& i : e.images) j["images"].push_back({{"id", i.first}, {"stamp", i.second}});
@@ -848,6 +888,8 @@ bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::s
                     {"surviving_phantoms", e.surviving_phantoms},
                     {"persistent_swaps", e.persistent_swaps},
                     {"surviving_swaps", e.surviving_swaps},
+                    {"class_changes", e.class_changes},
+                    {"classes_kept", e.classes_kept},
                     {"contacts", contactCountsJson(e)},
                     {"penetration_mm", scaled(e.penetration_m, 1000.0)},
                     {"gap_mm", scaled(e.gap_m, 1000.0)},

@@ -321,12 +321,14 @@ def mask_box_metrics(evals):
 
 BOP_MSSD_FRACTIONS = [0.05 * k for k in range(1, 11)]   # of the object's diameter
 BOP_MSPD_PIXELS = [5.0 * k for k in range(1, 11)]       # times image width / 640
+BOP_VSD_THETAS = [0.05 * k for k in range(1, 11)]       # the error's thresholds; the file has
+                                                        # one error per tau (5-50 % of diameter)
 
 
-def _bop_match(targets, estimates, error_key, threshold):
+def _bop_match(targets, estimates, error_key, threshold, tau=None):
     """bop_toolkit's match_poses for one image and class: the estimates by score (descending,
     the top len(targets) only: the ViVo task), each matched to the unmatched target of smallest
-    error below the threshold. Returns the number matched."""
+    error below the threshold (VSD: the error at the tau-th tau). Returns the number matched."""
     matched = set()
     for det in sorted(estimates, key=lambda d: -float(d['score']))[:len(targets)]:
         errors = det.get(error_key) or {}
@@ -335,6 +337,8 @@ def _bop_match(targets, estimates, error_key, threshold):
             if t in matched:
                 continue
             e = errors.get(str(t))
+            if e is not None and tau is not None:
+                e = e[tau] if len(e) > tau else None
             if e is not None and float(e) < best_error:
                 best, best_error = t, float(e)
         if best is not None:
@@ -343,16 +347,19 @@ def _bop_match(targets, estimates, error_key, threshold):
 
 
 def bop_metrics(evals):
-    """AR_MSSD, AR_MSPD (recall averaged over BOP's ten thresholds each) and their mean, pooled
-    and per class name; targets are the ground truth at least 10 % visible (not crowd). VSD is
-    not computed (docs/BENCHMARK.md): 'bop_ar' is the mean of the two. None when a file has no
-    BOP errors (made before they were recorded)."""
-    hits = {'mssd': {}, 'mspd': {}}   # class -> [matched per threshold]
+    """AR_VSD (recall averaged over 10 taus x 10 thetas), AR_MSSD, AR_MSPD (over BOP's ten
+    thresholds each) and AR, their mean, pooled and per class name; targets are the ground
+    truth at least 10 % visible (not crowd). Without VSD errors in the files (evaluate_run
+    --no-vsd, or files made before), AR is the mean of MSSD and MSPD and 'bop_ar_vsd' None.
+    All None when a file has no BOP errors."""
+    hits = {'mssd': {}, 'mspd': {}, 'vsd': {}}   # class -> [matched per threshold]
+    has_vsd = all(('vsd' in d) for ev in evals for d in (ev.get('detections') or []))
     targets_per_class = {}
     for ev in evals:
         dets = ev.get('detections') or []
         if dets and 'mssd_m' not in dets[0]:
-            return {'bop_ar': None, 'bop_ar_mssd': None, 'bop_ar_mspd': None, 'bop_per_class': {}}
+            return {'bop_ar': None, 'bop_ar_vsd': None, 'bop_ar_mssd': None, 'bop_ar_mspd': None,
+                    'bop_per_class': {}}
         names = {int(c['id']): str(c['name']) for c in ev.get('categories') or []}
         diameters = {int(c['id']): c.get('diameter_m') for c in ev.get('categories') or []}
         width = float((ev.get('image_size') or [640, 480])[0]) or 640.0
@@ -374,22 +381,31 @@ def bop_metrics(evals):
                 row = hits[kind].setdefault(name, [0] * len(thresholds))
                 for i, th in enumerate(thresholds):
                     row[i] += _bop_match(targets, estimates, key, th)
+            if has_vsd:
+                row = hits['vsd'].setdefault(name, [0] * 100)
+                for tau in range(10):
+                    for i, th in enumerate(BOP_VSD_THETAS):
+                        row[10 * tau + i] += _bop_match(targets, estimates, 'vsd', th, tau)
     total = sum(targets_per_class.values())
     if not total:
-        return {'bop_ar': None, 'bop_ar_mssd': None, 'bop_ar_mspd': None, 'bop_per_class': {}}
+        return {'bop_ar': None, 'bop_ar_vsd': None, 'bop_ar_mssd': None, 'bop_ar_mspd': None,
+                'bop_per_class': {}}
 
     def ar(kind, names):
         n = sum(targets_per_class[c] for c in names)
-        if not n:
+        if not n or (kind == 'vsd' and not has_vsd):
             return None
-        per_threshold = [sum(hits[kind].get(c, [0] * 10)[i] for c in names) / n
-                         for i in range(10)]
+        count = 100 if kind == 'vsd' else 10
+        per_threshold = [sum(hits[kind].get(c, [0] * count)[i] for c in names) / n
+                         for i in range(count)]
         return float(np.mean(per_threshold))
 
-    out = {'bop_ar_mssd': ar('mssd', targets_per_class), 'bop_ar_mspd': ar('mspd', targets_per_class)}
-    out['bop_ar'] = 0.5 * (out['bop_ar_mssd'] + out['bop_ar_mspd'])
-    out['bop_per_class'] = {c: {'targets': targets_per_class[c], 'ar_mssd': ar('mssd', [c]),
-                                'ar_mspd': ar('mspd', [c])} for c in sorted(targets_per_class)}
+    out = {'bop_ar_' + k: ar(k, targets_per_class) for k in ('vsd', 'mssd', 'mspd')}
+    parts = [out[k] for k in ('bop_ar_vsd', 'bop_ar_mssd', 'bop_ar_mspd') if out[k] is not None]
+    out['bop_ar'] = float(np.mean(parts))
+    out['bop_per_class'] = {c: {'targets': targets_per_class[c], 'ar_vsd': ar('vsd', [c]),
+                                'ar_mssd': ar('mssd', [c]), 'ar_mspd': ar('mspd', [c])}
+                            for c in sorted(targets_per_class)}
     return out
 
 
@@ -567,7 +583,7 @@ def detector_error_figures(evals):
     fm = [ev.get('final_map') or {} for ev in evals]
     out = {}
     for key in ('persistent_phantoms', 'surviving_phantoms', 'persistent_swaps',
-                'surviving_swaps'):
+                'surviving_swaps', 'class_changes', 'classes_kept'):
         values = [m.get(key) for m in fm]
         out[key] = None if any(v is None for v in values) else sum(int(v) for v in values)
     return out
@@ -1056,22 +1072,23 @@ def write_report(summary, out_dir, figures, command):
     rows = [[n, _num(m.get('add_auc')), _num(m.get('add_under_2cm'), 3)]
             for n, m in methods.items()]
     md += _table(['method', 'ADD AUC (10 cm)', 'ADD < 2 cm'], rows) + ['']
-    md += ['## BOP metrics (MSSD, MSPD; the appearance\'s symmetries)', '',
-           'Recall averaged over BOP\'s thresholds (MSSD 5-50 % of the diameter, MSPD 5-50 px '
-           'at 640 px width), estimates matched to the targets (at least 10 % visible) by '
-           'bop_toolkit\'s rule; AR here is the mean of AR_MSSD and AR_MSPD (VSD not computed).',
-           '']
-    rows = [[n, _num(m.get('bop_ar'), 3), _num(m.get('bop_ar_mssd'), 3),
-             _num(m.get('bop_ar_mspd'), 3)] for n, m in methods.items()]
-    md += _table(['method', 'AR (MSSD, MSPD)', 'AR_MSSD', 'AR_MSPD'], rows) + ['']
+    md += ['## BOP metrics (VSD, MSSD, MSPD; the appearance\'s symmetries)', '',
+           'Recall averaged over BOP19\'s thresholds (VSD: delta 15 mm, tau 5-50 % of the '
+           'diameter x theta 0.05-0.5, the test depth the true scene rendered; MSSD 5-50 % of '
+           'the diameter; MSPD 5-50 px at 640 px width), estimates matched to the targets (at '
+           'least 10 % visible) by bop_toolkit\'s rule; AR the mean of the three (of MSSD and '
+           'MSPD where VSD is n/a).', '']
+    rows = [[n, _num(m.get('bop_ar'), 3), _num(m.get('bop_ar_vsd'), 3),
+             _num(m.get('bop_ar_mssd'), 3), _num(m.get('bop_ar_mspd'), 3)]
+            for n, m in methods.items()]
+    md += _table(['method', 'AR', 'AR_VSD', 'AR_MSSD', 'AR_MSPD'], rows) + ['']
     classes = sorted({c for m in methods.values() for c in (m.get('bop_per_class') or {})})
     if classes:
-        rows = [[c] + ['%s / %s' % (_num(((m.get('bop_per_class') or {}).get(c) or {})
-                                         .get('ar_mssd'), 2),
-                                    _num(((m.get('bop_per_class') or {}).get(c) or {})
-                                         .get('ar_mspd'), 2))
-                       for m in methods.values()] for c in classes]
-        md += ['Per class, AR_MSSD / AR_MSPD:', '']
+        def cell(m, c):
+            a = (m.get('bop_per_class') or {}).get(c) or {}
+            return ' / '.join(_num(a.get(k), 2) for k in ('ar_vsd', 'ar_mssd', 'ar_mspd'))
+        rows = [[c] + [cell(m, c) for m in methods.values()] for c in classes]
+        md += ['Per class, AR_VSD / AR_MSSD / AR_MSPD:', '']
         md += _table(['class'] + list(methods), rows, numeric=False) + ['']
     if any(m['adds_missing'] for m in methods.values()):
         md += ['True positives without an ADD-S value (counted as infinite): %s.' % ', '.join(
@@ -1145,10 +1162,12 @@ def write_report(summary, out_dir, figures, command):
     rows = [[n, '%s of %s' % (_int(m.get('surviving_phantoms')),
                               _int(m.get('persistent_phantoms'))),
              '%s of %s' % (_int(m.get('surviving_swaps')), _int(m.get('persistent_swaps'))),
+             '%s / %s' % (_int(m.get('class_changes')), _int(m.get('classes_kept'))),
              _num(m.get('ate_mm')), _num(m.get('odometry_ate_mm'))]
             for n, m in methods.items()]
     md += _table(['method', 'phantoms in the final map', 'swapped classes in the final map',
-                  'ATE (mm)', 'odometry ATE (mm)'], rows) + ['']
+                  'look-alikes: classes changed / kept by the depth', 'ATE (mm)',
+                  'odometry ATE (mm)'], rows) + ['']
 
     classes = sorted({c for m in methods.values() for c in (m.get('class_recall') or {})})
     if classes:

@@ -4,8 +4,9 @@
 // bench_report.py turns into COCO mAP, precision and recall, ADD-S curves and the report.
 //
 //   evaluate_run --ground-truth SCENE_gt.yaml --results RESULTS.yaml [--json OUT.json]
-//       [--model-set primitives|ycb_video|FILE.yaml] [--models DIR] [--quiet]
+//       [--model-set primitives|ycb_video|FILE.yaml] [--models DIR] [--no-vsd] [--quiet]
 //
+// --no-vsd: BOP's MSSD and MSPD only, not its VSD (two renders per estimate).
 // The model set defaults to the one the ground truth names. Exit code 0, 1 when a file cannot be
 // read or nothing can be compared, 2 for bad arguments.
 #include "command_line.h"
@@ -22,13 +23,13 @@ namespace {
 
 struct Options {
   std::string ground_truth, results, json, model_set, models_dir;
-  bool quiet = false;
+  bool quiet = false, no_vsd = false;
 };
 
 void usage() {
   std::cerr << "usage: evaluate_run --ground-truth SCENE_gt.yaml --results RESULTS.yaml\n"
                "         [--json OUT.json] [--model-set primitives|ycb_video|FILE.yaml]\n"
-               "         [--models DIR] [--quiet]\n";
+               "         [--models DIR] [--no-vsd] [--quiet]\n";
 }
 
 Options parse(int argc, char** argv) {
@@ -40,6 +41,7 @@ Options parse(int argc, char** argv) {
   args.value("--model-set", &o.model_set);
   args.value("--models", &o.models_dir);
   args.toggle("--quiet", &o.quiet);
+  args.toggle("--no-vsd", &o.no_vsd);
   args.parse(argc, argv, usage);
   if (o.ground_truth.empty() || o.results.empty()) {
     throw std::runtime_error("--ground-truth and --results are required");
@@ -66,7 +68,9 @@ int main(int argc, char** argv) {
     return 1;
   }
   RunEvaluation evaluation;
-  if (!evaluateRun(gt, results, EvaluationConfig(), &evaluation, &error)) {
+  EvaluationConfig config;
+  config.vsd = !opt.no_vsd;
+  if (!evaluateRun(gt, results, config, &evaluation, &error)) {
     std::cerr << "evaluate_run: " << opt.results << ": " << error << "\n";
     return 1;
   }

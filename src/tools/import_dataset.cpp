@@ -387,10 +387,8 @@ bool Importer::write(std::string* error) {
   std::printf(
       "[import_dataset] %s (%s, poses in the %s frame, hand-held, odometry: %s): %zu frames, "
       "%zu objects, %d detections%s -> %s, %s\n",
-      opt.name.c_str(), seq.format.c_str(),
-      opt.model_frame == "bop" ? "BOP model" : "models' own", gt.odometry.c_str(),
-      seq.frames.size(),
-      gt.scene.objects.size(), detections,
+      opt.name.c_str(), seq.format.c_str(), opt.model_frame == "bop" ? "BOP model" : "models' own",
+      gt.odometry.c_str(), seq.frames.size(), gt.scene.objects.size(), detections,
       unknown_ids ? (", " + std::to_string(unknown_ids) + " of unknown object ids skipped").c_str()
                   : "",
       bag_path.c_str(), gt_path.c_str());

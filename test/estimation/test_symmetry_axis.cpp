@@ -165,8 +165,8 @@ double worstCanAngle(double offset, bool axis_from_detections, int* cans) {
       const SceneObject& o = s.scene.objects[static_cast<std::size_t>(truth)];
       if (!axisSeenByDetector(*o.model) || o.model->name != kf.detections[d].class_name) continue;
       const Eigen::Vector3d a = o.model->symmetry.axis;
-      const Eigen::Matrix3d R_ref = (T_cam_world * o.T_world_obj).linear() *
-                                    Eigen::AngleAxisd(offset, a).toRotationMatrix();
+      const Eigen::Matrix3d R_ref =
+          (T_cam_world * o.T_world_obj).linear() * Eigen::AngleAxisd(offset, a).toRotationMatrix();
       Eigen::Isometry3d& T = kf.detections[d].T_cam_obj;
       const Eigen::Matrix3d R = T.linear();
       T.linear() =
@@ -206,9 +206,10 @@ TEST(SymmetryAxis, ACanMeasuredAtAFixedAngleKeepsItThroughStageOneAndTwo) {
     int cans = 0, free_cans = 0;
     const double worst = worstCanAngle(offset, true, &cans);
     const double free = worstCanAngle(offset, false, &free_cans);
-    std::printf("measured %.0f deg off the truth: %d cans mapped, worst %.1f deg from it (axis "
-                "free: %.1f deg)\n",
-                offset / kDeg, cans, worst / kDeg, free / kDeg);
+    std::printf(
+        "measured %.0f deg off the truth: %d cans mapped, worst %.1f deg from it (axis "
+        "free: %.1f deg)\n",
+        offset / kDeg, cans, worst / kDeg, free / kDeg);
     EXPECT_GE(cans, 2);
     EXPECT_LT(worst, 5 * kDeg) << "offset " << offset / kDeg;
   }

@@ -2,6 +2,8 @@
 // about the axis of a can whose appearance is symmetric (0) or not (the chord of the turn), a
 // half-turn symmetric label, and the projection of a known shift (MSPD).
 #include "geofusion/evaluation/bop_metrics.h"
+#include "geofusion/evaluation/vsd.h"
+#include "geofusion/render/renderer.h"
 
 #include <gtest/gtest.h>
 
@@ -88,6 +90,36 @@ TEST(BopMetrics, BehindTheCameraIsInfinite) {
   EXPECT_TRUE(std::isinf(mspdError(m, behind, poseAt(0.0, 0.0, 0.5), PinholeIntrinsics())));
   ObjectModel empty;
   EXPECT_TRUE(std::isinf(mssdError(bopModelOf(empty), behind, behind)));
+}
+
+// VSD (vsd.h) of a can in front of the camera, the test image the can itself rendered: nothing
+// wrong at the true pose; 2 cm along the ray, wrong at BOP's smallest tau (4.5 mm) and right at
+// its largest (45 mm); turned about its axis, the same surface (VSD does not see it).
+TEST(BopMetrics, VisibleSurfaceDiscrepancy) {
+  auto renderer = std::make_shared<OffscreenRenderer>();
+  ASSERT_TRUE(renderer->ok()) << renderer->error();
+  const ObjectModel can = *ModelSet::builtinPrimitives().find("007_tuna_fish_can");
+  const BopModel m = bopModelOf(can);
+  const PinholeIntrinsics K;
+  const Eigen::Isometry3d T = poseAt(0.02, 0.01, 0.6);
+  VsdScorer vsd(renderer);
+  ASSERT_TRUE(vsd.setScene(K, {{&can, T}}));
+  const std::vector<double> exact = vsd.errors(can, T, T, m.diameter_m);
+  ASSERT_EQ(exact.size(), 10u);
+  for (double e : exact) EXPECT_NEAR(e, 0.0, 1e-9);
+  Eigen::Isometry3d farther = T;
+  farther.translation() *= (0.62 / 0.6);  // 2 cm farther along the ray
+  const std::vector<double> off = vsd.errors(can, farther, T, m.diameter_m);
+  EXPECT_GT(off.front(), 0.9);
+  EXPECT_LT(off.back(), 0.2);
+  const std::vector<double> turned = vsd.errors(can, turnedAboutZ(T, 1.0), T, m.diameter_m);
+  EXPECT_LT(turned.front(), 0.05);
+  // Nothing in view: the worst error; no scene: nothing computed.
+  Eigen::Isometry3d behind = T;
+  behind.translation().z() = -1.0;
+  EXPECT_EQ(vsd.errors(can, behind, behind, m.diameter_m), std::vector<double>(10, 1.0));
+  VsdScorer unset(renderer);
+  EXPECT_TRUE(unset.errors(can, T, T, m.diameter_m).empty());
 }
 
 }  // namespace

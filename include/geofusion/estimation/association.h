@@ -45,6 +45,14 @@ struct AssociationConfig {
   /// true: one Hungarian assignment per keyframe (all measurements jointly); false: the paper's
   /// greedy order (a later measurement that wants a taken object starts a new one).
   bool joint_assignment = true;
+  /// Issue 51: a detection of another class that would be the same object as one of the map
+  /// (the merge test: one object mapped twice) is the detector naming it otherwise, not a new
+  /// object. Both models are scored against the keyframe's depth there (f_gc) and the object
+  /// takes the class of larger support: its scores summed over the keyframes the classes
+  /// competed, plus class_vote_weight per detection of it (the votes as a prior). false: a new
+  /// object, which the merge settles later by the depth's support over its measurements.
+  bool class_by_consistency = true;
+  double class_vote_weight = 0.05;
 };
 
 /// Rotation angle between two orientations of a model, modulo its symmetry: for a continuous

@@ -30,11 +30,10 @@ struct BopIds {
 bool cameraSees(const Eigen::Isometry3d& T_cam_obj, const PinholeIntrinsics& K);
 
 /// The rows of `results` as BOP's CSV text, with its header line.
-std::string bopResultsCsv(const RunResults& results, const PinholeIntrinsics& K,
-                          const BopIds& ids);
+std::string bopResultsCsv(const RunResults& results, const PinholeIntrinsics& K, const BopIds& ids);
 
 /// Writes bopResultsCsv atomically to `path`.
-bool writeBopResults(const std::string& path, const RunResults& results,
-                     const PinholeIntrinsics& K, const BopIds& ids, std::string* error);
+bool writeBopResults(const std::string& path, const RunResults& results, const PinholeIntrinsics& K,
+                     const BopIds& ids, std::string* error);
 
 }  // namespace geofusion

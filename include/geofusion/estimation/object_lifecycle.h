@@ -15,6 +15,7 @@
 #include <Eigen/Geometry>
 
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -93,6 +94,14 @@ struct ObjectTrack {
   int free_space_keyframes = 0;  ///< keyframes in a row showing free space where it should be
   int last_checked = -1;         ///< keyframe of its last free-space check (rendered)
   int prior_measurements = 0;    ///< measurements made before a resume (saved with the map)
+  /// Issue 51, per class reported at this place: the depth's support where two classes competed
+  /// (the sum of its model's f_gc) and the detections of it (the object's own class included).
+  struct ClassEvidence {
+    double consistency = 0.0;
+    int votes = 0;
+  };
+  std::map<std::string, ClassEvidence> class_evidence;
+  int class_changes = 0;  ///< times the depth changed its class
   /// n_j: its measurements, those before a resume included.
   int measurementCount() const {
     return static_cast<int>(observations.size()) + prior_measurements;
@@ -106,6 +115,17 @@ struct ObjectTrack {
 /// A new track of `model` at `T_map_obj`, first seen at `keyframe` (-1: from a saved map).
 ObjectTrack makeTrack(int id, const std::shared_ptr<const ObjectModel>& model,
                       const Eigen::Isometry3d& T_map_obj, int keyframe);
+
+/// The track becomes an object of `model` (its box and appearance follow; counted in
+/// class_changes).
+void changeClass(ObjectTrack* track, const std::shared_ptr<const ObjectModel>& model);
+
+/// Issue 51: a detection of another class (`other`, scoring `f_other` at its pose) competes for
+/// the track's place, its own model scoring `f_held` there: both added to its class_evidence
+/// (the challenger's vote too), and true when the challenger's support (consistency +
+/// vote_weight x votes) now exceeds the held class's (the caller changes the class).
+bool challengerWins(ObjectTrack* track, const std::string& other, double f_other, double f_held,
+                    double vote_weight);
 
 /// The pose a track is reported (and checked) at: stage II's or stage I's, by method.
 using TrackPose = std::function<const Eigen::Isometry3d&(const ObjectTrack&)>;

@@ -63,6 +63,7 @@ struct MethodStages {
   bool free_space_removal = false;          ///< objects the depth shows gone are removed
   bool relocalisation = false;              ///< the camera corrected against the map on revisits
   bool relations_and_stage_two = false;     ///< contacts and stage II (reported poses: stage II)
+  bool class_by_consistency = false;        ///< a look-alike's class decided by the depth
 };
 MethodStages stagesOf(Method method);
 
@@ -139,6 +140,10 @@ enum class DetectionDecision {
   kAssociated,    ///< measured an object of the map
   kCandidate,     ///< measured a candidate that is still not in the map
   kRemoved,       ///< its object was removed or merged away at this keyframe
+  /// Issue 51: of another class than the object it would be mapped twice with; the depth kept
+  /// the object's class (not a measurement of it) ...
+  kClassKept,
+  kClassChanged,  ///< ... or gave the object this detection's class (a measurement of it)
 };
 const char* toString(DetectionDecision decision);
 bool parseDetectionDecision(const std::string& name, DetectionDecision* decision);
@@ -239,11 +244,18 @@ class SceneEstimator {
                                                 const ScoredDetections& detections,
                                                 const std::vector<int>& detection_object,
                                                 const std::vector<int>& started,
-                                                const std::vector<int>& removed) const;
+                                                const std::vector<int>& removed,
+                                                const std::vector<int>& contests) const;
   std::vector<int> mapKeyframeDetections(const Keyframe& keyframe,
                                          const ScoredDetections& detections, int t);
   std::vector<int> associateDetections(const Keyframe& keyframe, const ScoredDetections& detections,
-                                       int t, std::vector<int>* started);
+                                       int t, std::vector<int>* started,
+                                       std::vector<int>* contests);
+  /// Issue 51: the usable detections left unassigned that another class's object would be
+  /// mapped twice with are given to it (`assignment`), the depth deciding its class. Per usable
+  /// detection: 0 not contested, 1 the object kept its class, 2 it took the detection's.
+  std::vector<int> contestClasses(const Keyframe& keyframe, const ScoredDetections& detections,
+                                  int t, std::vector<int>* assignment);
   Eigen::MatrixXd associationLikelihood(const Keyframe& keyframe,
                                         const ScoredDetections& detections) const;
   Track& startTrack(const std::shared_ptr<const ObjectModel>& model,

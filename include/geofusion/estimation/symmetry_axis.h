@@ -37,9 +37,9 @@ struct AxialSample {
 struct AxialAgreement {
   int samples = 0;
   int order = 1;
-  double resultant = 0.0;    ///< mean resultant length in [0, 1] (1: all agree)
-  double mean_rad = 0.0;     ///< the reference turned by -mean_rad about the axis: their mean
-  double spread_rad = 0.0;   ///< circular standard deviation, divided by the order
+  double resultant = 0.0;   ///< mean resultant length in [0, 1] (1: all agree)
+  double mean_rad = 0.0;    ///< the reference turned by -mean_rad about the axis: their mean
+  double spread_rad = 0.0;  ///< circular standard deviation, divided by the order
 };
 AxialAgreement axialAgreement(const ObjectModel& model, const Eigen::Matrix3d& R_reference,
                               const std::vector<AxialSample>& samples);

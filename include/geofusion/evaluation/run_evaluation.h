@@ -65,6 +65,9 @@ struct EvaluationConfig {
   /// class within lifecycle_match_m of the swapped object.
   int persistent_min_keyframes = 5;
   double phantom_match_m = 0.03;
+  /// BOP's VSD of every estimate (vsd.h: two renders each, the test depth the true scene
+  /// rendered once a keyframe); false: MSSD and MSPD only (evaluate_run --no-vsd).
+  bool vsd = true;
 };
 
 /// A true object's life in the online map over a run.
@@ -116,6 +119,7 @@ struct DetectionBox {
   struct BopError {
     int truth = 0;  ///< ground truth id
     double mssd_m = 0.0, mspd_px = 0.0;
+    std::vector<double> vsd;  ///< one per tau of VsdConfig (empty: not computed)
   };
   std::vector<BopError> bop;
 };
@@ -147,8 +151,8 @@ struct RunEvaluation {
   std::vector<std::pair<int, std::string>> categories;  ///< (class id, name) of the model set
   /// BOP's object diameters (m, of the evaluation points) by class id: its MSSD thresholds.
   std::map<int, double> diameters_m;
-  std::vector<std::pair<int, double>> images;           ///< (keyframe index, stamp)
-  int unmatched_keyframes = 0;  ///< results keyframes without a ground-truth frame
+  std::vector<std::pair<int, double>> images;  ///< (keyframe index, stamp)
+  int unmatched_keyframes = 0;                 ///< results keyframes without a ground-truth frame
   std::vector<GroundTruthBox> ground_truth;
   std::vector<DetectionBox> detections;
 
@@ -164,6 +168,9 @@ struct RunEvaluation {
   /// map (EvaluationConfig::persistent_min_keyframes).
   int persistent_phantoms = 0, surviving_phantoms = 0;
   int persistent_swaps = 0, surviving_swaps = 0;
+  /// Detections whose look-alike class the depth gave to an object (decision class_changed), and
+  /// those it refused (class_kept), over the run (issue 51).
+  int class_changes = 0, classes_kept = 0;
   /// Support contacts of the map against the true support contacts, as (object pair, type).
   bool has_contacts = false;  ///< false: the method infers none (FbF, B-SLAM, R-Front)
   int true_contacts = 0, estimated_contacts = 0, correct_contacts = 0;
