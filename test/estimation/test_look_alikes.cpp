@@ -3,6 +3,7 @@
 // is reported as another can for a stretch of keyframes: in the middle of the run the map keeps
 // its class; from the first keyframe on, the map takes the right class back when the right
 // detections come.
+#include "demo_sequence.h"
 #include "geofusion/estimation/object_lifecycle.h"
 #include "geofusion/estimation/scene_estimator.h"
 #include "geofusion/evaluation/evaluation.h"
@@ -15,34 +16,11 @@
 namespace geofusion {
 namespace {
 
-struct Demo {
-  ModelSet models;
-  ClutterScene scene;
-  std::vector<FramePose> poses;
-  std::vector<SequenceFrame> frames;
-};
+using Demo = DemoSequence;
 
+// The demo scene (10 primitives), the detector's default phantoms.
 const Demo& demo() {
-  static Demo* s = [] {
-    auto* out = new Demo();
-    out->models = ModelSet::builtinPrimitives();
-    SuiteSpec suite;
-    suiteByName("demo", &suite);
-    std::string report;
-    unsigned used = 0;
-    if (!makeSuiteScene(suite, suite.scenes[0], out->models, &out->scene, &used, &report))
-      ADD_FAILURE() << report;
-    TrajectoryConfig traj;
-    traj.frames = 40;
-    out->poses = makeTrajectory(out->scene, traj, 3);
-    addOdometryDrift(&out->poses, OdometryNoise(), 4);
-    SequenceRenderer renderer(out->scene, PinholeIntrinsics());
-    std::mt19937 rng(5);
-    const DetectorModel detector = DetectorModel::denseFusion();
-    for (const FramePose& p : out->poses)
-      out->frames.push_back(renderer.render(p, DepthNoise(), detector, out->models, rng));
-    return out;
-  }();
+  static Demo* s = makeDemoSequence(ModelSet::builtinPrimitives(), 10, 0.3);
   return *s;
 }
 

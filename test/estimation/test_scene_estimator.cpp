@@ -1,5 +1,6 @@
 // The scene estimator end to end on a generated clutter sequence (built-in primitives): the four
 // methods from one code path, object count, false-positive removal and pose error.
+#include "demo_sequence.h"
 #include "geofusion/estimation/keyframe_selector.h"
 #include "geofusion/estimation/scene_estimator.h"
 #include "geofusion/evaluation/evaluation.h"
@@ -19,40 +20,12 @@
 namespace geofusion {
 namespace {
 
-struct Sequence {
-  ModelSet models;
-  ClutterScene scene;
-  std::vector<FramePose> poses;
-  std::vector<SequenceFrame> frames;
-};
+using Sequence = DemoSequence;
 
 // 40 keyframes at 5 Hz of a clutter scene, DenseFusion-like detections with `false_positives`
 // a keyframe, drifting odometry.
 Sequence* makeSequence(int objects, double false_positives) {
-  auto* s = new Sequence();
-  s->models = ModelSet::builtinPrimitives();
-  SuiteSpec suite;
-  suiteByName("demo", &suite);
-  SceneSpec spec = suite.scenes[0];
-  spec.num_objects = objects;
-  std::string report;
-  unsigned used = 0;
-  if (!makeSuiteScene(suite, spec, s->models, &s->scene, &used, &report)) {
-    ADD_FAILURE() << report;
-    return s;
-  }
-  TrajectoryConfig traj;
-  traj.frames = 40;
-  s->poses = makeTrajectory(s->scene, traj, 3);
-  addOdometryDrift(&s->poses, OdometryNoise(), 4);
-  SequenceRenderer renderer(s->scene, PinholeIntrinsics());
-  std::mt19937 rng(5);
-  DetectorModel detector = DetectorModel::denseFusion();
-  detector.false_positives_per_frame = false_positives;
-  for (const FramePose& p : s->poses) {
-    s->frames.push_back(renderer.render(p, DepthNoise(), detector, s->models, rng));
-  }
-  return s;
+  return makeDemoSequence(ModelSet::builtinPrimitives(), objects, false_positives);
 }
 
 // The demo scene (10 objects), 1 false positive a keyframe.

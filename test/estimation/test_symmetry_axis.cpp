@@ -2,6 +2,7 @@
 // the circular statistics, then the estimator end to end on a generated clutter sequence whose
 // cans carry a label (appearance symmetry none): a can measured at a fixed angle about its axis
 // keeps it through stage I and stage II; an untextured can's axis stays free.
+#include "demo_sequence.h"
 #include "geofusion/estimation/scene_estimator.h"
 #include "geofusion/estimation/symmetry_axis.h"
 #include "geofusion/evaluation/evaluation.h"
@@ -109,39 +110,18 @@ TEST(SymmetryAxis, BadSamplesAreLeftOut) {
 // The demo suite's first scene with the primitives' cans labelled (appearance none), 40
 // keyframes; every detection of a can turned to `offset` about its axis from the truth (its tilt
 // noise kept).
-struct LabelledCans {
-  ModelSet models;
-  ClutterScene scene;
-  std::vector<FramePose> poses;
-  std::vector<SequenceFrame> frames;
-};
+using LabelledCans = DemoSequence;
 
 const LabelledCans& labelledCans() {
   static LabelledCans* s = [] {
-    auto* out = new LabelledCans();
+    ModelSet labelled;
     const ModelSet primitives = ModelSet::builtinPrimitives();
     for (const auto& m : primitives.models()) {
       ObjectModel copy = *m;
       if (copy.symmetry.type == Symmetry::Type::kContinuous) copy.appearance_symmetry = Symmetry();
-      out->models.add(std::move(copy));
+      labelled.add(std::move(copy));
     }
-    SuiteSpec suite;
-    suiteByName("demo", &suite);
-    SceneSpec spec = suite.scenes[0];
-    std::string report;
-    unsigned used = 0;
-    if (!makeSuiteScene(suite, spec, out->models, &out->scene, &used, &report))
-      ADD_FAILURE() << report;
-    TrajectoryConfig traj;
-    traj.frames = 40;
-    out->poses = makeTrajectory(out->scene, traj, 3);
-    addOdometryDrift(&out->poses, OdometryNoise(), 4);
-    SequenceRenderer renderer(out->scene, PinholeIntrinsics());
-    std::mt19937 rng(5);
-    const DetectorModel detector = DetectorModel::denseFusion();
-    for (const FramePose& p : out->poses)
-      out->frames.push_back(renderer.render(p, DepthNoise(), detector, out->models, rng));
-    return out;
+    return makeDemoSequence(std::move(labelled), 10, 0.3);
   }();
   return *s;
 }

@@ -4,7 +4,8 @@
 // found against the test depth with tolerance delta, and the error is the share of the union of
 // the visible parts where the two surfaces differ by tau or more, or only one is visible. One
 // error per tau (BOP19: tau from 5 to 50 % of the object's diameter); an estimate is correct at
-// threshold theta when its error is below it (theta from 0.05 to 0.5).
+// threshold theta when its error is below it (theta from 0.05 to 0.5). The models are rendered
+// simplified (at most 3000 triangles, 1 mm: simplifyMesh) for time.
 #pragma once
 
 #include "geofusion/common/camera.h"
