@@ -62,15 +62,16 @@ double minMaxOverSymmetries(const BopModel& model, const Eigen::Isometry3d& T_es
   const Eigen::Matrix3d E = T_true.linear().transpose() * T_est.linear();
   for (std::size_t s = 0; s < order.size(); ++s) {
     order[s] = s;
-    closeness[s] = -(E * model.symmetries[s].linear()).trace();
+    closeness[s] = -(E.transpose() * model.symmetries[s].linear()).trace();
   }
   std::sort(order.begin(), order.end(),
             [&](std::size_t a, std::size_t b) { return closeness[a] < closeness[b]; });
   for (std::size_t s : order) {
-    const Eigen::Isometry3d T = T_est * model.symmetries[s];
+    // As bop_toolkit: the symmetry on the truth's side (T_true S), the estimate as it is.
+    const Eigen::Isometry3d T = T_true * model.symmetries[s];
     double worst = 0.0;
     for (const Eigen::Vector3d& x : model.points) {
-      worst = std::max(worst, distance(T * x, T_true * x));
+      worst = std::max(worst, distance(T_est * x, T * x));
       if (worst >= best) break;
     }
     best = std::min(best, worst);

@@ -34,7 +34,8 @@ std::vector<Eigen::Isometry3d> symmetryTransformations(const Symmetry& symmetry,
                                                        const Eigen::Vector3d& centre,
                                                        int continuous_steps = 315);
 
-/// MSSD (m): min over the symmetries S of max over the points x of |T_est S x - T_true x|.
+/// MSSD (m): min over the symmetries S of max over the points x of |T_est x - T_true S x|
+/// (bop_toolkit's pose_error.mssd: the symmetry on the truth's side).
 double mssdError(const BopModel& model, const Eigen::Isometry3d& T_est,
                  const Eigen::Isometry3d& T_true);
 
