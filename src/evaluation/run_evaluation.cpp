@@ -7,6 +7,7 @@
 #include "geofusion/estimation/relations.h"
 #include "geofusion/evaluation/bop_metrics.h"
 #include "geofusion/evaluation/evaluation.h"
+#include "geofusion/evaluation/keyframe_matcher.h"
 #include "geofusion/evaluation/metrics.h"
 #include "geofusion/render/renderer.h"
 #include "geofusion/simulation/clutter_scene.h"
@@ -28,39 +29,6 @@
 #include <tuple>
 
 namespace geofusion {
-
-Box2d projectedBox(const std::vector<Eigen::Vector3f>& points, const Eigen::Isometry3d& T_cam_obj,
-                   const PinholeIntrinsics& K) {
-  Box2d b;
-  b.x0 = b.y0 = std::numeric_limits<double>::infinity();
-  b.x1 = b.y1 = -std::numeric_limits<double>::infinity();
-  bool any = false;
-  for (const auto& p : points) {
-    const Eigen::Vector3d q = T_cam_obj * p.cast<double>();
-    if (!(q.z() > 0.01)) continue;
-    const Eigen::Vector2d uv = K.project(q);
-    b.x0 = std::min(b.x0, uv.x());
-    b.y0 = std::min(b.y0, uv.y());
-    b.x1 = std::max(b.x1, uv.x());
-    b.y1 = std::max(b.y1, uv.y());
-    any = true;
-  }
-  if (!any) return Box2d();
-  b.x0 = std::clamp(b.x0, 0.0, static_cast<double>(K.width));
-  b.x1 = std::clamp(b.x1, 0.0, static_cast<double>(K.width));
-  b.y0 = std::clamp(b.y0, 0.0, static_cast<double>(K.height));
-  b.y1 = std::clamp(b.y1, 0.0, static_cast<double>(K.height));
-  return b.empty() ? Box2d() : b;
-}
-
-double boxIou(const Box2d& a, const Box2d& b) {
-  if (a.empty() || b.empty()) return 0.0;
-  const double w = std::min(a.x1, b.x1) - std::max(a.x0, b.x0);
-  const double h = std::min(a.y1, b.y1) - std::max(a.y0, b.y0);
-  if (w <= 0 || h <= 0) return 0.0;
-  const double inter = w * h;
-  return inter / (a.width() * a.height() + b.width() * b.height() - inter);
-}
 
 namespace {
 
@@ -91,31 +59,6 @@ using ContactKey = std::tuple<int, int, std::string>;  // lower index, higher in
 ContactKey keyOf(int a, int b, const std::string& type) {
   return {std::min(a, b), std::max(a, b), type};
 }
-
-// The ground-truth keyframe of a results stamp: the nearest within the tolerance, or null.
-class KeyframeMatcher {
- public:
-  KeyframeMatcher(const GroundTruth& gt, double tolerance_s) : tolerance_s_(tolerance_s) {
-    for (const GroundTruthFrame& f : gt.frames)
-      if (f.keyframe) keyframes_.push_back(&f);
-  }
-  const GroundTruthFrame* at(double stamp) const {
-    auto it = std::lower_bound(keyframes_.begin(), keyframes_.end(), stamp,
-                               [](const GroundTruthFrame* f, double s) { return f->stamp_s < s; });
-    const GroundTruthFrame* best = nullptr;
-    for (auto c : {it, it == keyframes_.begin() ? it : it - 1}) {
-      if (c == keyframes_.end()) continue;
-      if (std::abs((*c)->stamp_s - stamp) <= tolerance_s_ &&
-          (!best || std::abs((*c)->stamp_s - stamp) < std::abs(best->stamp_s - stamp)))
-        best = *c;
-    }
-    return best;
-  }
-
- private:
-  double tolerance_s_;
-  std::vector<const GroundTruthFrame*> keyframes_;
-};
 
 // The run's header figures and the COCO categories (classes of the truth and of the estimates).
 void describeRun(const GroundTruth& gt, const RunResults& results, RunEvaluation* ev) {
@@ -952,14 +895,7 @@ bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::s
                         {"true_contacts", graphContactsJson(e.graph_true_contacts)},
                         {"estimated_objects", graphObjectsJson(e.graph_estimated_objects, true)},
                         {"estimated_contacts", graphContactsJson(e.graph_estimated_contacts)}};
-  return writeFileAtomically(
-      path,
-      [&](const std::string& tmp) {
-        std::ofstream file(tmp);
-        file << j.dump() << "\n";
-        return file.good();
-      },
-      error);
+  return writeTextAtomically(path, j.dump() + "\n", error);
 }
 
 std::string summarize(const RunEvaluation& e) {

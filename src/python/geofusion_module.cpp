@@ -149,10 +149,11 @@ class PyEstimator {
     ids.scene_id = scene_id;
     if (!path.is_none()) {
       std::string error;
-      if (!writeBopResults(path.cast<std::string>(), record_, last_K_, ids, &error))
+      if (!writeBopResults(path.cast<std::string>(), keyframeMapImages(record_), last_K_, ids,
+                           &error))
         throw std::runtime_error("bop_results: " + error);
     }
-    return bopResultsCsv(record_, last_K_, ids);
+    return bopResultsCsv(keyframeMapImages(record_), last_K_, ids);
   }
 
   py::list objects() const { return objectList(estimator_->objects()); }

@@ -1,5 +1,7 @@
 #include "geofusion/ros/scene_estimator_node.h"
 
+#include "geofusion/common/atomic_file.h"
+#include "geofusion/estimation/bop_results.h"
 #include "geofusion/estimation/run_results.h"
 #include "geofusion/ros/conversions.h"
 #include "geofusion/ros/map_messages.h"
@@ -102,6 +104,7 @@ void SceneEstimatorNode::advertise() {
                         [this](const ros::TimerEvent&) { republishObjectFrames(); });
   }
   save_srv_ = pnh_.advertiseService("save_map", &SceneEstimatorNode::onSave, this);
+  save_bop_srv_ = pnh_.advertiseService("save_bop_results", &SceneEstimatorNode::onSaveBop, this);
   load_srv_ = pnh_.advertiseService("load_map", &SceneEstimatorNode::onLoad, this);
   reset_srv_ = pnh_.advertiseService("reset", &SceneEstimatorNode::onReset, this);
 }
@@ -719,6 +722,40 @@ bool SceneEstimatorNode::onSave(geofusion::SaveMap::Request& req,
     return true;
   }
   res.success = save(req.path, &res.message, &res.files);
+  return true;
+}
+
+// The current map as BOP results, seen from every keyframe (bop_results.h, finalMapImages).
+bool SceneEstimatorNode::onSaveBop(geofusion::SaveBopResults::Request& req,
+                                   geofusion::SaveBopResults::Response& res) {
+  if (req.path.empty()) {
+    res.success = false;
+    res.message = "empty path";
+    return true;
+  }
+  std::string csv;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const RunResults map = pipeline_->currentMap();
+    if (map.trajectory.empty()) {
+      res.success = false;
+      res.message = "no keyframe yet: nothing to write";
+      return true;
+    }
+    BopIds ids;
+    ids.scene_id = req.scene_id;
+    const std::vector<BopImage> images = finalMapImages(map);
+    csv = bopResultsCsv(images, pipeline_->intrinsics(), ids);
+    res.images = static_cast<int>(images.size());
+  }
+  std::string error;
+  res.success = writeTextAtomically(req.path, csv, &error);
+  res.rows = static_cast<int>(std::count(csv.begin(), csv.end(), '\n')) - 1;
+  res.message = res.success
+                    ? "BOP results written to " + req.path + " (" + std::to_string(res.rows) +
+                          " rows, " + std::to_string(res.images) + " images)"
+                    : "BOP results not written: " + error;
+  if (!res.success) ROS_WARN_STREAM("geofusion: " << res.message);
   return true;
 }
 

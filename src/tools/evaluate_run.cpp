@@ -4,13 +4,18 @@
 // bench_report.py turns into COCO mAP, precision and recall, ADD-S curves and the report.
 //
 //   evaluate_run --ground-truth SCENE_gt.yaml --results RESULTS.yaml [--json OUT.json]
-//       [--model-set primitives|ycb_video|FILE.yaml] [--models DIR] [--no-vsd] [--quiet]
+//       [--model-set primitives|ycb_video|FILE.yaml] [--models DIR] [--no-vsd]
+//       [--bop-dataset DIR [--bop-scene-id N]] [--quiet]
 //
 // --no-vsd: BOP's MSSD and MSPD only, not its VSD (two renders per estimate).
+// --bop-dataset: also writes (or updates) the ground truth at the run's keyframes as a BOP dataset
+// folder (evaluation/bop_dataset.h; scene --bop-scene-id, default 0, as run_offline's
+// --bop-results), so that BOP's own toolkit scores the run's BOP results.
 // The model set defaults to the one the ground truth names. Exit code 0, 1 when a file cannot be
 // read or nothing can be compared, 2 for bad arguments.
 #include "command_line.h"
 #include "geofusion/estimation/run_results.h"
+#include "geofusion/evaluation/bop_dataset.h"
 #include "geofusion/evaluation/run_evaluation.h"
 #include "geofusion/simulation/dataset.h"
 #include "model_set_option.h"
@@ -22,14 +27,16 @@
 namespace {
 
 struct Options {
-  std::string ground_truth, results, json, model_set, models_dir;
+  std::string ground_truth, results, json, model_set, models_dir, bop_dataset;
+  int bop_scene_id = 0;
   bool quiet = false, no_vsd = false;
 };
 
 void usage() {
   std::cerr << "usage: evaluate_run --ground-truth SCENE_gt.yaml --results RESULTS.yaml\n"
                "         [--json OUT.json] [--model-set primitives|ycb_video|FILE.yaml]\n"
-               "         [--models DIR] [--no-vsd] [--quiet]\n";
+               "         [--models DIR] [--no-vsd] [--bop-dataset DIR [--bop-scene-id N]]\n"
+               "         [--quiet]\n";
 }
 
 Options parse(int argc, char** argv) {
@@ -42,6 +49,8 @@ Options parse(int argc, char** argv) {
   args.value("--models", &o.models_dir);
   args.toggle("--quiet", &o.quiet);
   args.toggle("--no-vsd", &o.no_vsd);
+  args.value("--bop-dataset", &o.bop_dataset);
+  args.value("--bop-scene-id", &o.bop_scene_id);
   args.parse(argc, argv, usage);
   if (o.ground_truth.empty() || o.results.empty()) {
     throw std::runtime_error("--ground-truth and --results are required");
@@ -76,6 +85,13 @@ int main(int argc, char** argv) {
   }
   if (!opt.json.empty() && !writeEvaluationJson(opt.json, evaluation, &error)) {
     std::cerr << "evaluate_run: " << error << "\n";
+    return 1;
+  }
+  BopIds ids;
+  ids.scene_id = opt.bop_scene_id;
+  if (!opt.bop_dataset.empty() &&
+      !writeBopDataset(opt.bop_dataset, gt, results, ids, config.stamp_tolerance_s, &error)) {
+    std::cerr << "evaluate_run: --bop-dataset: " << error << "\n";
     return 1;
   }
   if (!opt.quiet) std::cout << summarize(evaluation);  // warnings included

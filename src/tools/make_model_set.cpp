@@ -223,14 +223,7 @@ int main(int argc, char** argv) {
   }
   std::string error;
   const std::string yaml = modelSetYaml(o.name, entries);
-  if (!writeFileAtomically(
-          o.out,
-          [&](const std::string& tmp) {
-            std::ofstream f(tmp);
-            f << yaml;
-            return static_cast<bool>(f.flush());
-          },
-          &error)) {
+  if (!writeTextAtomically(o.out, yaml, &error)) {
     std::cerr << "make_model_set: " << error << "\n";
     return 1;
   }

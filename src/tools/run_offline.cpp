@@ -473,7 +473,8 @@ bool writeOutputs(const Options& opt, geofusion::EstimatorPipeline* pipeline,
   if (!opt.bop_results.empty()) {
     BopIds ids;
     ids.scene_id = opt.bop_scene_id;
-    if (!writeBopResults(opt.bop_results, *results, pipeline->intrinsics(), ids, error)) {
+    if (!writeBopResults(opt.bop_results, keyframeMapImages(*results), pipeline->intrinsics(), ids,
+                         error)) {
       std::cerr << "run_offline: --bop-results: " << *error << "\n";
       return false;
     }

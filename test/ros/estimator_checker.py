@@ -16,7 +16,7 @@ import tf2_ros
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from dynamic_reconfigure.client import Client
 from geofusion.msg import ObjectMap
-from geofusion.srv import LoadMap, SaveMap
+from geofusion.srv import LoadMap, SaveBopResults, SaveMap
 from std_srvs.srv import Trigger
 from sensor_msgs import point_cloud2
 from sensor_msgs.msg import PointCloud2
@@ -211,6 +211,30 @@ class EstimatorReplayTest(unittest.TestCase):
         with open(background, 'rb') as f:
             self.assertTrue(f.readline().startswith(b'# Octomap OcTree binary file'))
         self.assertEqual(len(saved['final_map']['objects']), len(final.objects))
+        # The map as BOP results (issue 51): the final map from every keyframe, one row an object
+        # in view, as BOP's toolkit reads them.
+        save_bop = rospy.ServiceProxy(NS + '/save_bop_results', SaveBopResults)
+        bop_path = os.path.join(self.dir, 'geofusion_ycbv-test.csv')
+        res = save_bop(bop_path, 5)
+        self.assertTrue(res.success, res.message)
+        self.assertGreaterEqual(res.images, KEYFRAMES - 1)
+        with open(bop_path) as f:
+            lines = f.read().splitlines()
+        self.assertEqual(lines[0], 'scene_id,im_id,obj_id,score,R,t,time')
+        self.assertEqual(len(lines) - 1, res.rows)
+        classes = {o.class_id for o in final.objects}
+        seen = set()
+        for line in lines[1:]:
+            scene_id, im_id, obj_id, score, R, t, run_time = line.split(',')
+            self.assertEqual(int(scene_id), 5)
+            self.assertTrue(0 <= int(im_id) < res.images, line)
+            self.assertIn(int(obj_id), classes)
+            self.assertEqual(len(R.split()), 9)
+            self.assertGreater(float(t.split()[2]), 0.0, 'an object behind the camera: ' + line)
+            self.assertEqual(float(run_time), -1.0)
+            seen.add(int(obj_id))
+        self.assertEqual(seen, classes, 'every class of the map is in view somewhere')
+        self.assertFalse(save_bop('', 5).success)
         res = rospy.ServiceProxy(NS + '/reset', Trigger)()
         self.assertTrue(res.success)
         time.sleep(0.5)

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <fstream>
 #include <functional>
 #include <string>
 
@@ -54,6 +55,19 @@ inline bool writeFileAtomically(const std::string& path,
     return false;
   }
   return true;
+}
+
+/// writeFileAtomically of a text.
+inline bool writeTextAtomically(const std::string& path, const std::string& text,
+                                std::string* error) {
+  return writeFileAtomically(
+      path,
+      [&text](const std::string& tmp) {
+        std::ofstream f(tmp);
+        f << text;
+        return static_cast<bool>(f.flush());
+      },
+      error);
 }
 
 }  // namespace geofusion

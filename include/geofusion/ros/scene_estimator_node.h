@@ -11,6 +11,7 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
 #include <geofusion/LoadMap.h>
+#include <geofusion/SaveBopResults.h>
 #include <geofusion/SaveMap.h>
 #include <geofusion/SceneEstimatorConfig.h>
 #include <nav_msgs/Odometry.h>
@@ -73,6 +74,7 @@ class SceneEstimatorNode {
   void publishBackground(const BackgroundMap& map, const std_msgs::Header& header);
   void republishObjectFrames();
   bool onSave(geofusion::SaveMap::Request& req, geofusion::SaveMap::Response& res);
+  bool onSaveBop(geofusion::SaveBopResults::Request& req, geofusion::SaveBopResults::Response& res);
   bool onReset(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   void onReconfigure(geofusion::SceneEstimatorConfig& config, uint32_t level);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
@@ -113,7 +115,7 @@ class SceneEstimatorNode {
   std::vector<geometry_msgs::TransformStamped> object_frames_;
   ros::Timer object_frames_timer_;
   double object_frames_tolerance_s_ = 0.2;
-  ros::ServiceServer save_srv_, load_srv_, reset_srv_;
+  ros::ServiceServer save_srv_, save_bop_srv_, load_srv_, reset_srv_;
   diagnostic_updater::Updater diagnostics_;
   ros::WallTimer diagnostics_timer_;
   std::atomic<std::size_t> frames_{0};  // synchronised sets received
