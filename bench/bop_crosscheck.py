@@ -6,37 +6,28 @@ in evaluate_run's JSON) and their recall and average recall (src/tools/bench_rep
 bop_metrics). This script scores the same run with BOP's own toolkit (thodan/bop_toolkit:
 scripts/eval_calc_errors.py and scripts/eval_calc_scores.py) and prints both side by side:
 
-    bop_crosscheck.py --gt bench_01_gt.yaml [--gt ...] --results geofusion_ycbv-test.csv [...]
-                      --models /work/shared/data/ycb_video --bop-toolkit DIR
-                      [--eval geofusion_eval.json ...] [--work DIR] [--method NAME]
-                      [--model-set config/models/ycb_video.yaml] [--python PYTHON]
-                      [--summary OUT.json] [--bop-models-info models_info.json]
+    bop_crosscheck.py --dataset DIR --results geofusion_ycbv-test.csv [...]
+                      --bop-toolkit DIR [--eval geofusion_eval.json ...] [--work DIR]
+                      [--method NAME] [--python PYTHON] [--summary OUT.json]
+                      [--bop-models-info models_info.json]
 
 The toolkit is fetched separately (a checkout or `git archive` of its repository, given with
 --bop-toolkit); it is not part of this package and nothing of it is copied here. It needs numpy
-(< 2), scipy, pypng and imageio in the Python that runs this script (or --python), which also
-needs PyYAML; the
+(< 2), scipy, pypng and imageio in the Python that runs this script (or --python); the
 package's own bop_metrics is imported from bench_report.py in this process (matplotlib and
 pycocotools, which bench_report.py imports but bop_metrics does not use, are replaced by empty
 stand-ins when missing).
 
 What it does:
-  1. Builds a temporary BOP dataset "ycbv" (test split) in --work from the ground-truth files
-     (format geofusion_ground_truth_v1, docs/dataset.md): one scene per file, scene_id the number
-     at the end of the scene's name (bench_03 -> 3, what run_offline's --bop-scene-id must have
-     been); its images are the keyframes, im_id the keyframe's index (its order among the
-     keyframes; with --eval, the evaluation's image of the same stamp); scene_camera.json (cam_K of
-     the intrinsics, depth_scale 1), scene_gt.json (every object present at that frame, its pose in
-     the keyframe's TRUE camera frame and BOP's model frame, T_cam_obj x Translation(box centre),
-     t in mm), scene_gt_info.json (visib_fract: the file's visible fraction) and
-     test_targets_bop19.json (objects at least 10 % visible, inst_count per image and object).
-     models_eval/: obj_XXXXXX.ply (the YCB-Video evaluation points, mm, in BOP's frame: origin at
-     the centre of their bounding box) and models_info.json (diameter: the largest distance
-     between two points, as bop_metrics.cpp; symmetries: the model set's `appearance_symmetry`,
-     else its `symmetry`, turning about BOP's origin (offset 0), as the package scores them).
-     With --bop-models-info (BOP's own ycbv models_info.json) its diameters and symmetries are
-     used instead: how far the package's numbers are from BOP's official scoring of the same
-     poses (the points stay the YCB-Video evaluation points, not BOP's meshes).
+  1. Takes the BOP dataset the package wrote for the run (evaluate_run --bop-dataset DIR, or
+     `make bench`'s <out>/bop/ycbv: evaluation/bop_dataset.h; its folder must be named ycbv, the
+     toolkit's parameters for it are used): the ground truth at the keyframes in BOP's model
+     frame, models_eval (points and models_info.json with the model set's appearance
+     symmetries), BOP19's targets and geofusion_ids.json (scenes, image sizes, the truth object
+     of each gt_id). It is copied into --work; with --bop-models-info (BOP's own ycbv
+     models_info.json) its diameters and symmetries replace the package's there: how far the
+     package's numbers are from BOP's official scoring of the same poses (the points stay the
+     YCB-Video evaluation points, not BOP's meshes).
   2. Concatenates the BOP results CSVs (run_offline --bop-results) into one
      <method>_ycbv-test.csv and runs eval_calc_errors.py (mssd, mspd; n_top -1: the ViVo task)
      and eval_calc_scores.py at BOP19's thresholds (MSSD 0.05-0.5 of the diameter, MSPD 5-50 px,
@@ -61,11 +52,9 @@ import sys
 import types
 
 import numpy as np
-import yaml
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
-DEFAULT_MODEL_SET = os.path.join(REPO, 'config', 'models', 'ycb_video.yaml')
 BENCH_REPORT = os.path.join(REPO, 'src', 'tools', 'bench_report.py')
 
 DATASET, SPLIT = 'ycbv', 'test'
@@ -103,36 +92,6 @@ class CheckError(Exception):
 # ---------------------------------------------------------------------------------------------
 # Geometry
 
-def pose_matrix(p):
-    """[x, y, z, qx, qy, qz, qw] -> 4x4."""
-    x, y, z, qx, qy, qz, qw = (float(v) for v in p)
-    n = np.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
-    qx, qy, qz, qw = qx / n, qy / n, qz / n, qw / n
-    T = np.eye(4)
-    T[:3, :3] = [[1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)],
-                 [2 * (qx * qy + qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - qx * qw)],
-                 [2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx * qx + qy * qy)]]
-    T[:3, 3] = [x, y, z]
-    return T
-
-
-def rotation(axis, angle_deg):
-    """Rotation matrix about `axis` (Rodrigues)."""
-    a = np.asarray(axis, float)
-    a = a / np.linalg.norm(a)
-    t = np.radians(float(angle_deg))
-    K = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
-    return np.eye(3) + np.sin(t) * K + (1 - np.cos(t)) * K @ K
-
-
-def max_pairwise_distance(points, chunk=512):
-    best = 0.0
-    for i in range(0, len(points), chunk):
-        d2 = ((points[i:i + chunk, None, :] - points[None, :, :]) ** 2).sum(-1)
-        best = max(best, float(d2.max()))
-    return float(np.sqrt(best))
-
-
 def projected_box(pts_mm, R, t_mm, K, width, height):
     """evaluate_run's projectedBox: the points in front (z > 1 cm) projected, the box clamped to
     the image; [x, y, w, h] or None."""
@@ -152,86 +111,64 @@ def projected_box(pts_mm, R, t_mm, K, width, height):
 # ---------------------------------------------------------------------------------------------
 # Inputs
 
-def load_models(models_dir, model_set_path, bop_models_info=None):
-    """{obj_id: {name, pts (mm, BOP frame), centre_m, info (models_info.json entry)}}: class id k
-    is line k of classes.txt; the symmetries are the model set's appearance symmetries, the
-    diameter the points'; or both from `bop_models_info` (a models_info.json) when given."""
-    official = None
-    if bop_models_info:
-        with open(bop_models_info) as f:
-            official = {int(k): v for k, v in json.load(f).items()}
-    with open(os.path.join(models_dir, 'classes.txt')) as f:
-        names = [line.strip() for line in f if line.strip()]
-    with open(model_set_path) as f:
-        model_set = {c['name']: c for c in yaml.safe_load(f)['classes']}
+def load_dataset(root):
+    """The package's BOP dataset (evaluate_run --bop-dataset): {'models': {obj_id: {name, pts
+    (mm, BOP frame)}}, 'scenes': {scene_id: {name, K, width, height, images: [im_id],
+    gt_objects: {im_id: [truth object index per gt_id]}}}, 'targets': [...]}."""
+    def read(path):
+        with open(os.path.join(root, path)) as f:
+            return json.load(f)
+    if os.path.basename(os.path.normpath(root)) != DATASET:
+        raise CheckError("%s: the dataset folder must be named %s (the toolkit's parameters "
+                         "for it are used)" % (root, DATASET))
+    ids = read('geofusion_ids.json')
     models = {}
-    for obj_id, name in enumerate(names, 1):
-        pts_m = np.loadtxt(os.path.join(models_dir, name, 'points.xyz'), dtype=float, ndmin=2)
-        lo, hi = pts_m.min(0), pts_m.max(0)
-        centre = 0.5 * (lo + hi)
-        pts = 1000.0 * (pts_m - centre)
-        info = {'diameter': max_pairwise_distance(pts)}
-        for axis, a, b in zip('xyz', 1000.0 * (lo - centre), 1000.0 * (hi - centre)):
-            info['min_' + axis], info['size_' + axis] = float(a), float(b - a)
-        entry = model_set.get(name)
-        if entry is None:
-            raise CheckError('%s: class %s not in %s' % (models_dir, name, model_set_path))
-        sym = entry.get('appearance_symmetry', entry.get('symmetry'))
-        if isinstance(sym, dict) and sym.get('type') == 'discrete':
-            info['symmetries_discrete'] = []
-            for r in sym['rotations']:
-                S = np.eye(4)
-                S[:3, :3] = rotation(r['axis'], r['angle_deg'])
-                info['symmetries_discrete'].append([float(v) for v in S.flatten()])
-        elif isinstance(sym, dict) and sym.get('type') == 'continuous':
-            a = np.asarray(sym['axis'], float)
-            info['symmetries_continuous'] = [{'axis': [float(v) for v in a / np.linalg.norm(a)],
-                                              'offset': [0.0, 0.0, 0.0]}]
-        elif sym not in (None, 'none') and not (isinstance(sym, dict)
-                                                and sym.get('type') == 'none'):
-            raise CheckError('%s: symmetry of %s not understood: %r' % (model_set_path, name, sym))
-        if official is not None:
-            if obj_id not in official:
-                raise CheckError('%s: no object %d' % (bop_models_info, obj_id))
-            for key in ('diameter', 'symmetries_discrete', 'symmetries_continuous'):
-                info.pop(key, None)
-                if key in official[obj_id]:
-                    info[key] = official[obj_id][key]
-        models[obj_id] = {'name': name, 'pts': pts, 'centre_m': centre, 'info': info}
-    return models
+    for obj_id, name in ids.get('obj_ids', {}).items():
+        ply = os.path.join(root, 'models_eval', 'obj_%06d.ply' % int(obj_id))
+        with open(ply) as f:
+            header = 0
+            for line in f:
+                header += 1
+                if line.strip() == 'end_header':
+                    break
+        models[int(obj_id)] = {'name': name, 'pts': np.loadtxt(ply, skiprows=header, dtype=float,
+                                                               ndmin=2)}
+    scenes = {}
+    for sid, sc in ids.get('scenes', {}).items():
+        sid = int(sid)
+        camera = read(os.path.join(SPLIT, '%06d' % sid, 'scene_camera.json'))
+        first = camera[min(camera, key=int)]
+        scenes[sid] = {'name': sc['name'], 'width': int(sc['width']),
+                       'height': int(sc['height']),
+                       'K': np.array(first['cam_K'], float).reshape(3, 3),
+                       'images': sorted(int(i) for i in sc['images']),
+                       'gt_objects': {int(i): v for i, v in sc['gt_objects'].items()}}
+    if not scenes:
+        raise CheckError('%s: no scene in geofusion_ids.json' % root)
+    return {'models': models, 'scenes': scenes, 'targets': read(TARGETS_FILE)}
 
 
-def scene_id_of(name):
-    m = re.search(r'(\d+)$', str(name))
-    if not m:
-        raise CheckError('scene name %r does not end in a number (the BOP scene id)' % name)
-    return int(m.group(1))
-
-
-def load_ground_truth(path):
-    """The parts of a geofusion_ground_truth_v1 file the BOP dataset needs."""
-    loader = getattr(yaml, 'CSafeLoader', yaml.SafeLoader)
+def copy_dataset(root, work_datasets, bop_models_info=None):
+    """The dataset copied into the toolkit's datasets folder, with BOP's models_info.json's
+    diameters and symmetries put in where given."""
+    target = os.path.join(work_datasets, DATASET)
+    shutil.copytree(root, target)
+    if not bop_models_info:
+        return
+    with open(bop_models_info) as f:
+        official = json.load(f)
+    path = os.path.join(target, 'models_eval', 'models_info.json')
     with open(path) as f:
-        gt = yaml.load(f, Loader=loader)
-    if not isinstance(gt, dict) or gt.get('format') != 'geofusion_ground_truth_v1':
-        raise CheckError('%s: not a geofusion_ground_truth_v1 file' % path)
-    if gt.get('model_set') != 'ycb_video':
-        raise CheckError('%s: model set %r, not ycb_video' % (path, gt.get('model_set')))
-    k = gt['intrinsics']
-    objects = [{'index': int(o['index']), 'class_id': int(o['class_id']),
-                'class_name': o['class_name'], 'T_map_obj': pose_matrix(o['pose']),
-                'from': int(o.get('present_from_frame', 0)),
-                'until': int(o.get('present_until_frame', -1))} for o in gt['objects']]
-    keyframes = [{'frame': int(f['index']), 'stamp': float(f['stamp']),
-                  'T_map_cam': pose_matrix(f['map_camera']),
-                  'visible_fraction': [float(v) for v in f.get('visible_fraction') or []],
-                  'visible_pixels': [int(v) for v in f.get('visible_pixels') or []],
-                  'visible_boxes': f.get('visible_boxes') or []}
-                 for f in gt['frames'] if f.get('keyframe')]
-    return {'path': path, 'scene': gt['scene'], 'scene_id': scene_id_of(gt['scene']),
-            'width': int(k['width']), 'height': int(k['height']),
-            'K': np.array([[k['fx'], 0, k['cx']], [0, k['fy'], k['cy']], [0, 0, 1]], float),
-            'objects': objects, 'keyframes': keyframes}
+        info = json.load(f)
+    for obj_id, entry in info.items():
+        if obj_id not in official:
+            raise CheckError('%s: no object %s' % (bop_models_info, obj_id))
+        for key in ('diameter', 'symmetries_discrete', 'symmetries_continuous'):
+            entry.pop(key, None)
+            if key in official[obj_id]:
+                entry[key] = official[obj_id][key]
+    with open(path, 'w') as f:
+        json.dump(info, f, indent=1)
 
 
 def load_results(paths):
@@ -259,114 +196,23 @@ def load_results(paths):
     return rows
 
 
-def load_evals(paths):
-    """{scene_id: evaluation} of evaluate_run --json files."""
+def load_evals(paths, scenes):
+    """{scene_id: evaluation} of evaluate_run --json files, by the dataset's scene names."""
+    id_of = {sc['name']: sid for sid, sc in scenes.items()}
     evals = {}
     for path in paths:
         with open(path) as f:
             ev = json.load(f)
         if ev.get('format') != 'geofusion_evaluation_v1':
             raise CheckError('%s: not a geofusion_evaluation_v1 file' % path)
-        sid = scene_id_of(ev.get('scene'))
+        sid = id_of.get(ev.get('scene'))
+        if sid is None:
+            raise CheckError('%s: scene %s is not in the dataset' % (path, ev.get('scene')))
         if sid in evals:
             raise CheckError('%s: scene %s twice' % (path, ev.get('scene')))
         ev['_path'] = path
         evals[sid] = ev
     return evals
-
-
-# ---------------------------------------------------------------------------------------------
-# The BOP dataset
-
-def image_ids(gt, ev):
-    """[(im_id, keyframe)]: by order among the keyframes; with the scene's evaluation, by stamp
-    (its images are the run's keyframes: id = keyframe index), checked against the order."""
-    by_order = list(enumerate(gt['keyframes']))
-    if ev is None:
-        return by_order, []
-    notes = []
-    kf_by_stamp = {round(k['stamp'], 4): k for k in gt['keyframes']}
-    out = []
-    for image in ev.get('images') or []:
-        k = kf_by_stamp.get(round(float(image['stamp']), 4))
-        if k is None:
-            notes.append('image %s (stamp %.4f) is no keyframe of the ground truth'
-                         % (image['id'], image['stamp']))
-            continue
-        out.append((int(image['id']), k))
-    order = {id(k): i for i, k in by_order}
-    moved = [(i, order[id(k)]) for i, k in out if order[id(k)] != i]
-    if moved:
-        notes.append('%d images whose id is not their order among the keyframes (first: id %d, '
-                     'order %d)' % (len(moved), moved[0][0], moved[0][1]))
-    if len(out) != len(by_order):
-        notes.append('%d keyframes in the ground truth, %d images in the evaluation'
-                     % (len(by_order), len(out)))
-    return out, notes
-
-
-def write_dataset(root, scenes, models):
-    """Writes the temporary BOP dataset under root/ycbv. Returns ({scene_id: {im_id: [object
-    index per gt_id]}} (the toolkit's gt_id -> ground-truth object), the targets)."""
-    base = os.path.join(root, DATASET)
-    if os.path.exists(base):
-        shutil.rmtree(base)
-    models_dir = os.path.join(base, 'models_eval')
-    os.makedirs(models_dir)
-    for obj_id, m in models.items():
-        with open(os.path.join(models_dir, 'obj_%06d.ply' % obj_id), 'w') as f:
-            f.write('ply\nformat ascii 1.0\nelement vertex %d\nproperty float x\nproperty float y\n'
-                    'property float z\nend_header\n' % len(m['pts']))
-            for p in m['pts']:
-                f.write('%.6f %.6f %.6f\n' % tuple(p))
-    with open(os.path.join(models_dir, 'models_info.json'), 'w') as f:
-        json.dump({str(i): m['info'] for i, m in models.items()}, f, indent=1)
-
-    targets, gt_objects = [], {}
-    for sc in scenes:
-        gt, sid = sc['gt'], sc['gt']['scene_id']
-        K = gt['K']
-        scene_camera, scene_gt, scene_gt_info = {}, {}, {}
-        gt_objects[sid] = {}
-        for im_id, kf in sc['images']:
-            T_cam_map = np.linalg.inv(kf['T_map_cam'])
-            im_gt, im_info, index = [], [], []
-            inst = {}
-            for o in gt['objects']:
-                i = o['index']
-                if not (kf['frame'] >= o['from'] and (o['until'] < 0 or kf['frame'] < o['until'])):
-                    continue                                  # not in the scene at that frame
-                m = models[o['class_id']]
-                T = T_cam_map @ o['T_map_obj']
-                t_bop = T[:3, :3] @ m['centre_m'] + T[:3, 3]  # T x Translation(box centre)
-                im_gt.append({'obj_id': o['class_id'],
-                              'cam_R_m2c': [float(v) for v in T[:3, :3].flatten()],
-                              'cam_t_m2c': [float(v) for v in 1000.0 * t_bop]})
-                vf = kf['visible_fraction'][i] if i < len(kf['visible_fraction']) else 0.0
-                px = kf['visible_pixels'][i] if i < len(kf['visible_pixels']) else 0
-                box = kf['visible_boxes'][i] if i < len(kf['visible_boxes']) else [0, 0, 0, 0]
-                im_info.append({'visib_fract': vf, 'px_count_visib': px,
-                                'px_count_all': int(round(px / vf)) if vf > 0 else 0,
-                                'bbox_visib': [int(v) for v in box] if px else [-1, -1, -1, -1]})
-                index.append(i)
-                if vf >= VISIB_MIN:
-                    inst[o['class_id']] = inst.get(o['class_id'], 0) + 1
-            scene_camera[str(im_id)] = {'cam_K': [float(v) for v in K.flatten()],
-                                        'depth_scale': 1.0}
-            scene_gt[str(im_id)] = im_gt
-            scene_gt_info[str(im_id)] = im_info
-            gt_objects[sid][im_id] = index
-            targets += [{'scene_id': sid, 'im_id': im_id, 'obj_id': obj_id, 'inst_count': n}
-                        for obj_id, n in sorted(inst.items())]
-        scene_dir = os.path.join(base, SPLIT, '%06d' % sid)
-        os.makedirs(scene_dir)
-        for name, content in (('scene_camera.json', scene_camera), ('scene_gt.json', scene_gt),
-                              ('scene_gt_info.json', scene_gt_info)):
-            with open(os.path.join(scene_dir, name), 'w') as f:
-                json.dump(content, f)
-    with open(os.path.join(base, TARGETS_FILE), 'w') as f:
-        json.dump(targets, f)
-    return gt_objects, targets
 
 
 # ---------------------------------------------------------------------------------------------
@@ -485,7 +331,7 @@ def package_recalls(br, evals):
 # ---------------------------------------------------------------------------------------------
 # Per-estimate comparison
 
-def match_estimates(rows, evals, scenes_by_id, models, box_tol=0.5, score_tol=6e-7):
+def match_estimates(rows, evals, scenes, models, box_tol=0.5, score_tol=6e-7):
     """{(scene_id, im_id, obj_id, est_id): detection of the evaluation} for the CSV rows: same
     image and class, same score (the CSV has 6 decimals) and the same projected box of the pose.
     Also the detections left unmatched in images and classes that have targets."""
@@ -498,9 +344,9 @@ def match_estimates(rows, evals, scenes_by_id, models, box_tol=0.5, score_tol=6e
         sid = r['scene_id']
         if sid not in evals:
             continue
-        gt = scenes_by_id[sid]['gt']
-        box = projected_box(models[r['obj_id']]['pts'], r['R'], r['t'], gt['K'], gt['width'],
-                            gt['height'])
+        sc = scenes[sid]
+        box = projected_box(models[r['obj_id']]['pts'], r['R'], r['t'], sc['K'], sc['width'],
+                            sc['height'])
         best, best_d = None, box_tol
         for d in by_key.get((sid, r['im_id'], r['obj_id']), []):
             if id(d) in used or abs(float(d['score']) - r['score']) > score_tol or box is None:
@@ -568,15 +414,13 @@ def compare_errors(error_dirs, matched, evals, gt_objects, scene_ids):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split('\n')[0])
-    ap.add_argument('--gt', action='append', required=True, help='SCENE_gt.yaml (repeatable)')
+    ap.add_argument('--dataset', required=True,
+                    help='BOP dataset folder named ycbv of evaluate_run --bop-dataset')
     ap.add_argument('--results', action='append', required=True,
                     help='BOP results CSV of run_offline --bop-results (repeatable)')
-    ap.add_argument('--models', required=True, help='YCB-Video models folder (classes.txt)')
     ap.add_argument('--bop-toolkit', required=True, help='bop_toolkit checkout')
     ap.add_argument('--eval', action='append', default=[],
                     help="evaluate_run --json of the same run (repeatable: one per scene)")
-    ap.add_argument('--model-set', default=DEFAULT_MODEL_SET,
-                    help='model set whose symmetries to use (default: %(default)s)')
     ap.add_argument('--method', help='method name in the result file name (default: the first '
                     "CSV's name up to '_')")
     ap.add_argument('--work', default='/tmp/bopcheck/work', help='scratch folder (emptied)')
@@ -584,31 +428,21 @@ def main(argv=None):
                     help='Python that runs the toolkit (default: this one)')
     ap.add_argument('--summary', help='also write the numbers to this JSON file')
     ap.add_argument('--bop-models-info', help="BOP's models_info.json: its diameters and "
-                    "symmetries instead of the points' and the model set's")
+                    "symmetries instead of the package's")
     args = ap.parse_args(argv)
 
     try:
-        models = load_models(args.models, args.model_set, args.bop_models_info)
-        evals = load_evals(args.eval)
-        scenes, notes = [], []
-        for path in args.gt:
-            gt = load_ground_truth(path)
-            if any(s['gt']['scene_id'] == gt['scene_id'] for s in scenes):
-                raise CheckError('%s: scene id %d twice' % (path, gt['scene_id']))
-            images, n = image_ids(gt, evals.get(gt['scene_id']))
-            notes += ['%s: %s' % (gt['scene'], x) for x in n]
-            scenes.append({'gt': gt, 'images': images})
-        scenes_by_id = {s['gt']['scene_id']: s for s in scenes}
-        for sid in evals:
-            if sid not in scenes_by_id:
-                raise CheckError('%s: scene %d has no --gt' % (evals[sid]['_path'], sid))
-        widths = {s['gt']['width'] for s in scenes}
+        dataset = load_dataset(args.dataset)
+        models, scenes, targets = dataset['models'], dataset['scenes'], dataset['targets']
+        evals = load_evals(args.eval, scenes)
+        notes = []
+        widths = {sc['width'] for sc in scenes.values()}
         if widths != {640}:
             notes.append('image width %s: the toolkit scales MSPD by 640 / the ycbv width (640), '
                          'the package by its own width / 640' % sorted(widths))
 
         rows = load_results(args.results)
-        known = {(sid, im) for sid, s in scenes_by_id.items() for im, _ in s['images']}
+        known = {(sid, im) for sid, sc in scenes.items() for im in sc['images']}
         stray = [r for r in rows if (r['scene_id'], r['im_id']) not in known]
         if stray:
             notes.append('%d result rows of images not in the dataset (first: scene %d, image %d)'
@@ -623,12 +457,13 @@ def main(argv=None):
             notes.append('rows of one image with different times (BOP requires one)')
 
         work = os.path.abspath(args.work)
-        toolkit = Toolkit(args.bop_toolkit, args.python, work, scenes_by_id)
+        toolkit = Toolkit(args.bop_toolkit, args.python, work, scenes)
         if os.path.exists(work):
             shutil.rmtree(work)
         for sub in ('datasets', 'results', 'eval'):
             os.makedirs(os.path.join(work, sub))
-        gt_objects, targets = write_dataset(os.path.join(work, 'datasets'), scenes, models)
+        copy_dataset(args.dataset, os.path.join(work, 'datasets'), args.bop_models_info)
+        gt_objects = {sid: sc['gt_objects'] for sid, sc in scenes.items()}
         method = args.method or os.path.basename(args.results[0]).split('_')[0]
         method = re.sub(r'[^A-Za-z0-9-]', '', method) or 'method'
         result_filename = '%s_%s-%s.csv' % (method, DATASET, SPLIT)
@@ -636,7 +471,7 @@ def main(argv=None):
             f.write(HEADER + '\n' + ''.join(r['line'] + '\n' for r in rows))
 
         print('BOP cross-check: %s, %d scene(s) %s, %d images, %d targets (%d instances), '
-              '%d estimates' % (method, len(scenes), sorted(scenes_by_id), len(known),
+              '%d estimates' % (method, len(scenes), sorted(scenes), len(known),
                                 len(targets), sum(t['inst_count'] for t in targets), len(rows)))
         print('work folder: %s (toolkit log: toolkit.log)' % work)
         if args.bop_models_info:
@@ -657,7 +492,7 @@ def main(argv=None):
             package_ar = br.bop_metrics(ev_list)
             ours = package_recalls(br, ev_list)
 
-        summary = {'method': method, 'scenes': sorted(scenes_by_id), 'notes': notes}
+        summary = {'method': method, 'scenes': sorted(scenes), 'notes': notes}
         for kind, label in (('mssd', 'MSSD (fraction of diameter)'), ('mspd', 'MSPD (px)')):
             print('\n%s recall per threshold:' % label)
             print('  %-8s %-22s %s' % ('th', 'toolkit (tp/targets)',
@@ -684,8 +519,8 @@ def main(argv=None):
             print(line)
 
         if evals:
-            matched, no_match, package_only = match_estimates(rows, evals, scenes_by_id, models)
-            cmp = compare_errors(error_dirs, matched, evals, gt_objects, sorted(scenes_by_id))
+            matched, no_match, package_only = match_estimates(rows, evals, scenes, models)
+            cmp = compare_errors(error_dirs, matched, evals, gt_objects, sorted(scenes))
             summary.update({'estimates_matched': len(matched),
                             'csv_rows_unmatched': len(no_match),
                             'package_detections_not_in_csv': len(package_only),
@@ -712,7 +547,7 @@ def main(argv=None):
             with open(args.summary, 'w') as f:
                 json.dump(summary, f, indent=1)
         return 0
-    except (CheckError, OSError, ValueError, KeyError, yaml.YAMLError) as e:
+    except (CheckError, OSError, ValueError, KeyError) as e:
         print('bop_crosscheck: %s' % e, file=sys.stderr)
         return 1
 

@@ -65,6 +65,7 @@ done
 # One method on one scene: the run, then its evaluation (its output printed whole at its end).
 run_one() {
   local bag="$1" method="$2" scene gt model_set results params_var params_file params log scene_id
+  local bop_dataset=()
   scene=$(basename "$bag" .bag)
   gt="$data/${scene}_gt.yaml"
   model_set=$(sed -n 's/^model_set: *//p' "$gt" | head -1)
@@ -76,12 +77,18 @@ run_one() {
   # BOP results beside the run (docs/results.md): scene id the scene's number (bench_03: 3).
   scene_id=$(printf '%s' "$scene" | sed -n 's/.*[^0-9]\([0-9][0-9]*\)$/\1/p')
   scene_id=$((10#${scene_id:-0}))
+  # ... and the ground truth at the keyframes as a BOP dataset, once a scene (every method has
+  # the same keyframes), so that BOP's own toolkit can score them (docs/BENCHMARK.md).
+  # The dataset's name is BOP's for the YCB-Video set (ycbv), else the model set's.
+  local bop_name="$model_set"
+  [ "$model_set" = ycb_video ] && bop_name=ycbv
+  [ "$method" = geofusion ] && bop_dataset=(--bop-dataset "$out/bop/$bop_name" --bop-scene-id "$scene_id")
   log=$(
     "$bin/run_offline" --bag "$bag" --out "$results" "${params[@]}" --method "$method" \
       --model-set "$model_set" "${models[@]}" --bop-results "${results%.yaml}.bop.csv" \
       --bop-scene-id "$scene_id" --quiet 2>&1 | sed 's/^run_offline: /  /'
     "$bin/evaluate_run" --ground-truth "$gt" --results "$results" --model-set "$model_set" \
-      "${models[@]}" --json "$out/eval/$scene/$method.json" --quiet 2>&1
+      "${models[@]}" --json "$out/eval/$scene/$method.json" "${bop_dataset[@]}" --quiet 2>&1
   ) || { printf '%s\n' "$log"; say "$scene / $method failed"; touch "$results.failed"; return 1; }
   printf '%s\n' "$log"
 }

@@ -7,7 +7,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cmath>
@@ -187,7 +190,11 @@ SceneFiles sceneFiles(const GroundTruth& gt, const RunResults& results, const Bo
     gt_objects[key] = truth.objects;
     ++s.images;
   }
-  s.mapping = {{"name", gt.scene_name}, {"images", images}, {"gt_objects", gt_objects}};
+  s.mapping = {{"name", gt.scene_name},
+               {"width", K.width},
+               {"height", K.height},
+               {"images", images},
+               {"gt_objects", gt_objects}};
   return s;
 }
 
@@ -211,6 +218,26 @@ bool writeModels(const std::string& root, const GroundTruth& gt, const BopIds& i
   return writeJson(folder + "/models_info.json", info, error);
 }
 
+// An exclusive lock on the folder (flock on <root>/.geofusion_lock) while one writer updates the
+// files several scenes share; released when it goes out of scope.
+class FolderLock {
+ public:
+  explicit FolderLock(const std::string& root)
+      : fd_(::open((root + "/.geofusion_lock").c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644)) {
+    locked_ = fd_ >= 0 && ::flock(fd_, LOCK_EX) == 0;
+  }
+  ~FolderLock() {
+    if (fd_ >= 0) ::close(fd_);  // releases the lock
+  }
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+  bool locked() const { return locked_; }
+
+ private:
+  int fd_;
+  bool locked_ = false;
+};
+
 }  // namespace
 
 bool writeBopDataset(const std::string& root, const GroundTruth& gt, const RunResults& results,
@@ -221,9 +248,17 @@ bool writeBopDataset(const std::string& root, const GroundTruth& gt, const RunRe
     if (error) *error = "no keyframe of the results is a keyframe of the ground truth";
     return false;
   }
+  if (!makeFolder(root, &e)) {
+    if (error) *error = e;
+    return false;
+  }
+  const FolderLock lock(root);
+  if (!lock.locked()) {
+    if (error) *error = "cannot lock " + root + "/.geofusion_lock";
+    return false;
+  }
   json mapping, targets;
-  bool ok = makeFolder(root, &e) &&
-            readJson(root + "/geofusion_ids.json", json::object(), &mapping, &e) &&
+  bool ok = readJson(root + "/geofusion_ids.json", json::object(), &mapping, &e) &&
             readJson(root + "/test_targets_bop19.json", json::array(), &targets, &e);
   if (ok && !mapping.contains("obj_ids")) mapping["obj_ids"] = json::object();
   ok = ok && writeModels(root, gt, ids, &mapping["obj_ids"], &e);

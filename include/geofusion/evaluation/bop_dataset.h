@@ -6,8 +6,9 @@
 //   <root>/models_eval/models_info.json     diameter, box, appearance symmetries (mm)
 //   <root>/test/<scene_id>/scene_camera.json, scene_gt.json, scene_gt_info.json
 //   <root>/test_targets_bop19.json          objects at least 10 % visible, per image
-//   <root>/geofusion_ids.json               the mapping: scene name, keyframe and stamp of each
-//                                           image, class of each obj_id, object index of each gt
+//   <root>/geofusion_ids.json               the mapping: scene name, image size, keyframe and
+//                                           stamp of each image, class of each obj_id, object
+//                                           index of each gt
 // Images are the run's keyframes (im_id = BopIds::imageOf(keyframe), as in the results CSV), the
 // ground truth's keyframe of the same stamp (within stamp_tolerance_s). Several scenes share one
 // folder: each call replaces its scene's entries and keeps the others'.
