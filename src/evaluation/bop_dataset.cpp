@@ -198,22 +198,26 @@ SceneFiles sceneFiles(const GroundTruth& gt, const RunResults& results, const Bo
   return s;
 }
 
-// The models of the scene's classes, their info merged into models_info.json.
-bool writeModels(const std::string& root, const GroundTruth& gt, const BopIds& ids, json* classes,
+// Every class of the model set (an estimate of any class is scored, BOP's toolkit loads the
+// models of all the dataset's obj_ids), their info merged into models_info.json.
+bool writeModels(const std::string& root, const ModelSet& models, const BopIds& ids, json* classes,
                  std::string* error) {
   const std::string folder = root + "/models_eval";
   if (!makeFolder(folder, error)) return false;
   json info;
   if (!readJson(folder + "/models_info.json", json::object(), &info, error)) return false;
   std::set<int> written;
-  for (const SceneObject& o : gt.scene.objects) {
-    const int obj_id = ids.objectOf(*o.model);
-    if (!written.insert(obj_id).second) continue;
+  for (const auto& model : models.models()) {
+    const int obj_id = ids.objectOf(*model);
+    if (!written.insert(obj_id).second) {
+      if (error) *error = "two classes with BOP obj_id " + std::to_string(obj_id);
+      return false;
+    }
     char name[32];
     std::snprintf(name, sizeof(name), "/obj_%06d.ply", obj_id);
-    if (!writePointsPly(folder + name, *o.model, error)) return false;
-    info[std::to_string(obj_id)] = modelInfo(*o.model);
-    (*classes)[std::to_string(obj_id)] = o.model->name;
+    if (!writePointsPly(folder + name, *model, error)) return false;
+    info[std::to_string(obj_id)] = modelInfo(*model);
+    (*classes)[std::to_string(obj_id)] = model->name;
   }
   return writeJson(folder + "/models_info.json", info, error);
 }
@@ -240,8 +244,9 @@ class FolderLock {
 
 }  // namespace
 
-bool writeBopDataset(const std::string& root, const GroundTruth& gt, const RunResults& results,
-                     const BopIds& ids, double stamp_tolerance_s, std::string* error) {
+bool writeBopDataset(const std::string& root, const ModelSet& models, const GroundTruth& gt,
+                     const RunResults& results, const BopIds& ids, double stamp_tolerance_s,
+                     std::string* error) {
   std::string e;
   SceneFiles scene = sceneFiles(gt, results, ids, stamp_tolerance_s);
   if (scene.images == 0) {
@@ -261,7 +266,7 @@ bool writeBopDataset(const std::string& root, const GroundTruth& gt, const RunRe
   bool ok = readJson(root + "/geofusion_ids.json", json::object(), &mapping, &e) &&
             readJson(root + "/test_targets_bop19.json", json::array(), &targets, &e);
   if (ok && !mapping.contains("obj_ids")) mapping["obj_ids"] = json::object();
-  ok = ok && writeModels(root, gt, ids, &mapping["obj_ids"], &e);
+  ok = ok && writeModels(root, models, ids, &mapping["obj_ids"], &e);
   char scene_dir[32];
   std::snprintf(scene_dir, sizeof(scene_dir), "/test/%06d", ids.scene_id);
   const std::string dir = root + scene_dir;

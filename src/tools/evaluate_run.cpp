@@ -89,8 +89,8 @@ int main(int argc, char** argv) {
   }
   BopIds ids;
   ids.scene_id = opt.bop_scene_id;
-  if (!opt.bop_dataset.empty() &&
-      !writeBopDataset(opt.bop_dataset, gt, results, ids, config.stamp_tolerance_s, &error)) {
+  if (!opt.bop_dataset.empty() && !writeBopDataset(opt.bop_dataset, models, gt, results, ids,
+                                                   config.stamp_tolerance_s, &error)) {
     std::cerr << "evaluate_run: --bop-dataset: " << error << "\n";
     return 1;
   }

@@ -47,6 +47,9 @@ class BopDataset : public ::testing::Test {
     can->appearance_symmetry.rotations = {
         Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitZ()))};
     auto box = std::make_shared<ObjectModel>(*primitives.find("003_cracker_box"));
+    models.add(*can);
+    models.add(*box);
+    models.add(*primitives.find("005_tomato_soup_can"));  // a class no true object has
     SceneObject a, b;
     a.model = can;
     a.T_world_obj.translation() = Eigen::Vector3d(0.05, 0.0, 0.0);
@@ -74,6 +77,7 @@ class BopDataset : public ::testing::Test {
   }
   void TearDown() override { std::system(("rm -rf " + folder).c_str()); }
   std::string folder, root;
+  ModelSet models;
   GroundTruth gt;
   RunResults results;
 };
@@ -82,7 +86,7 @@ TEST_F(BopDataset, TheGroundTruthAsBopsToolkitReadsIt) {
   BopIds ids;
   ids.scene_id = 3;
   std::string error;
-  ASSERT_TRUE(writeBopDataset(root, gt, results, ids, 1e-3, &error)) << error;
+  ASSERT_TRUE(writeBopDataset(root, models, gt, results, ids, 1e-3, &error)) << error;
   const json camera = readJson(root + "/test/000003/scene_camera.json");
   const json scene_gt = readJson(root + "/test/000003/scene_gt.json");
   const json info = readJson(root + "/test/000003/scene_gt_info.json");
@@ -115,11 +119,17 @@ TEST_F(BopDataset, TheGroundTruthAsBopsToolkitReadsIt) {
   EXPECT_EQ(ids_file["scenes"]["3"]["images"]["1"]["frame"].get<int>(), 8);
   EXPECT_EQ(ids_file["scenes"]["3"]["gt_objects"]["0"], json({0, 1}));
   EXPECT_EQ(ids_file["obj_ids"][std::to_string(gt.scene.objects[1].model->id)], "003_cracker_box");
+  // Every class of the model set has its model (an estimate of any class can be scored).
+  const int soup = models.find("005_tomato_soup_can")->id;
+  EXPECT_EQ(ids_file["obj_ids"][std::to_string(soup)], "005_tomato_soup_can");
+  char ply[64];
+  std::snprintf(ply, sizeof(ply), "/models_eval/obj_%06d.ply", soup);
+  EXPECT_TRUE(std::ifstream(root + ply).good()) << ply;
 }
 
 TEST_F(BopDataset, ModelsInfoInBopsFrameWithTheAppearanceSymmetries) {
   std::string error;
-  ASSERT_TRUE(writeBopDataset(root, gt, results, BopIds(), 1e-3, &error)) << error;
+  ASSERT_TRUE(writeBopDataset(root, models, gt, results, BopIds(), 1e-3, &error)) << error;
   const ObjectModel& can = *gt.scene.objects[0].model;
   const json info = readJson(root + "/models_eval/models_info.json")[std::to_string(can.id)];
   const BopModel bop = bopModelOf(can);
@@ -163,19 +173,19 @@ TEST_F(BopDataset, ScenesShareAFolderAndACorruptFileIsReported) {
   first.scene_id = 3;
   second.scene_id = 4;
   std::string error;
-  ASSERT_TRUE(writeBopDataset(root, gt, results, first, 1e-3, &error)) << error;
-  ASSERT_TRUE(writeBopDataset(root, gt, results, second, 1e-3, &error)) << error;
-  ASSERT_TRUE(writeBopDataset(root, gt, results, second, 1e-3, &error)) << error;  // again
+  ASSERT_TRUE(writeBopDataset(root, models, gt, results, first, 1e-3, &error)) << error;
+  ASSERT_TRUE(writeBopDataset(root, models, gt, results, second, 1e-3, &error)) << error;
+  ASSERT_TRUE(writeBopDataset(root, models, gt, results, second, 1e-3, &error)) << error;  // again
   EXPECT_EQ(readJson(root + "/test_targets_bop19.json").size(), 4u);  // 2 a scene, not 6
   EXPECT_EQ(readJson(root + "/geofusion_ids.json")["scenes"].size(), 2u);
   // No keyframe of the results at a ground-truth stamp: nothing to write.
   RunResults shifted = results;
   for (KeyframeResult& k : shifted.keyframes) k.stamp_s += 1.5;
-  EXPECT_FALSE(writeBopDataset(root, gt, shifted, first, 1e-3, &error));
+  EXPECT_FALSE(writeBopDataset(root, models, gt, shifted, first, 1e-3, &error));
   EXPECT_NE(error.find("no keyframe"), std::string::npos) << error;
   // A corrupt targets file is reported and left as it is.
   { std::ofstream(root + "/test_targets_bop19.json") << "[{"; }
-  EXPECT_FALSE(writeBopDataset(root, gt, results, first, 1e-3, &error));
+  EXPECT_FALSE(writeBopDataset(root, models, gt, results, first, 1e-3, &error));
   EXPECT_NE(error.find("not JSON"), std::string::npos) << error;
   std::ifstream f(root + "/test_targets_bop19.json");
   std::stringstream text;

@@ -2,7 +2,7 @@
 // toolkit (bop_toolkit's eval_calc_errors.py / eval_calc_scores.py) can score the BOP results
 // the package writes (estimation/bop_results.h) for the same run. Layout (bop_toolkit's
 // dataset_params for a dataset <root>, split `test`):
-//   <root>/models_eval/obj_<obj_id>.ply     the evaluation points, mm, BOP's model frame
+//   <root>/models_eval/obj_<obj_id>.ply     every class's evaluation points, mm, BOP's frame
 //   <root>/models_eval/models_info.json     diameter, box, appearance symmetries (mm)
 //   <root>/test/<scene_id>/scene_camera.json, scene_gt.json, scene_gt_info.json
 //   <root>/test_targets_bop19.json          objects at least 10 % visible, per image
@@ -26,9 +26,11 @@ namespace geofusion {
 constexpr double kBopTargetMinVisible = 0.1;
 
 /// Writes (or updates) the BOP dataset folder `root` with the ground truth of `gt` at the
-/// keyframes of `results`; false with `error` when a file cannot be written or no keyframe
-/// matches. Every file is written atomically.
-bool writeBopDataset(const std::string& root, const GroundTruth& gt, const RunResults& results,
-                     const BopIds& ids, double stamp_tolerance_s, std::string* error);
+/// keyframes of `results` and the models of every class of `models` (the ones the results may
+/// name); false with `error` when a file cannot be written, two classes share an obj_id or no
+/// keyframe matches. Every file is written atomically.
+bool writeBopDataset(const std::string& root, const ModelSet& models, const GroundTruth& gt,
+                     const RunResults& results, const BopIds& ids, double stamp_tolerance_s,
+                     std::string* error);
 
 }  // namespace geofusion
