@@ -25,9 +25,14 @@ say "frames of the recording as PNG: $out/previews/"
 shot="$out/demo_01_rviz.png"
 if command -v Xvfb >/dev/null && command -v import >/dev/null; then
   say "replaying the recording through the estimator nodelet and rviz under Xvfb for a screenshot"
-  display=":$((90 + RANDOM % 9))"
-  Xvfb "$display" -screen 0 1280x1024x24 -nolisten tcp >/dev/null 2>&1 &
+  # A display Xvfb finds free itself (-displayfd writes its number), never one in use.
+  displayfd="$out/.xvfb_display"
+  rm -f "$displayfd"
+  Xvfb -displayfd 3 -screen 0 1280x1024x24 -nolisten tcp 3>"$displayfd" >/dev/null 2>&1 &
   xvfb_pid=$!
+  for _ in $(seq 50); do grep -q . "$displayfd" 2>/dev/null && break; sleep 0.1; done
+  display=":$(head -n1 "$displayfd" 2>/dev/null)"
+  [ "$display" != ":" ] || { say "Xvfb did not start"; exit 1; }
   DISPLAY="$display" roslaunch --skip-log-check geofusion replay.launch bag:="$out/demo_01.bag" \
     rviz:=true stop_at_end:=false >"$out/demo_rviz.log" 2>&1 &
   launch_pid=$!

@@ -65,6 +65,7 @@ make_chroot() {
   mirror=$(debian_source)
   say "$release: making a minimal chroot in $dir from $mirror ($(wc -w <<<"$list") packages)"
   rm -rf "$dir"
+  mkdir -p "$chroots"  # mmdebstrap makes $dir, not its parent (a fresh machine has none)
   start=$(date +%s)
   mmdebstrap --variant=apt --components=main --include="$(tr -s ' ' ',' <<<"$list" | sed 's/^,//; s/,$//')" \
     "$release" "$dir" "deb $mirror $release main" "deb $mirror $release-updates main"
@@ -189,7 +190,11 @@ releases=("$@")
 [ ${#releases[@]} -gt 0 ] || releases=(bullseye trixie)
 failed=()
 for r in "${releases[@]}"; do
-  test_release "$r" || failed+=("$r")
+  # Each release in a job of its own, so that `set -e` holds inside it (bash ignores it in a
+  # function called as `test_release || ...`): a release stops at its first failed step (a chroot
+  # that could not be made is never entered) and the next release still runs.
+  test_release "$r" &
+  wait $! || failed+=("$r")
 done
 if [ ${#failed[@]} -gt 0 ]; then
   say "test-platforms: FAILED on ${failed[*]}"

@@ -611,6 +611,20 @@ class Table {
          [](GeoFusionConfig& c) { return &c.node.publish_map_to_odom; });
     text("node.save_on_shutdown", "save the map to this path prefix at shutdown (\"\": no)",
          [](GeoFusionConfig& c) { return &c.node.save_on_shutdown; });
+    integer("node.autosave_every_keyframes", 0, 1000000,
+            "save the map every N keyframes, as ~save_map does (0: not by count)",
+            [](GeoFusionConfig& c) { return &c.node.autosave_every_keyframes; });
+    real("node.autosave_every_s", 0, 1e6,
+         "... or when this long passed since the last autosave and a keyframe came, s (0: not by "
+         "time; both 0: no autosave)",
+         [](GeoFusionConfig& c) { return &c.node.autosave_every_s; });
+    text("node.autosave_prefix",
+         "path prefix of the autosave (\"\": $ROS_HOME/geofusion/<node name>/autosave)",
+         [](GeoFusionConfig& c) { return &c.node.autosave_prefix; });
+    flag("node.resume_autosave",
+         "at start, continue the autosave when this launch wrote it (a respawn), before "
+         "~initial_map",
+         [](GeoFusionConfig& c) { return &c.node.resume_autosave; });
     integer("node.background_publish_every", 1, 10000, "publish the background every N keyframes",
             [](GeoFusionConfig& c) { return &c.node.background_publish_every; });
     flag("node.publish_object_frames",

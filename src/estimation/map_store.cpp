@@ -1,5 +1,7 @@
 #include "geofusion/estimation/map_store.h"
 
+#include <yaml-cpp/yaml.h>
+
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -148,6 +150,29 @@ bool loadMap(const std::string& path, const ModelSet& models, RunResults* result
   *results = std::move(r);
   if (files) *files = found;
   return true;
+}
+
+bool readSavedMapSession(const std::string& path, std::string* session, bool* exists,
+                         std::string* error) {
+  const std::string yaml = prefixOf(path) + ".yaml";
+  std::error_code ec;
+  *exists = std::filesystem::exists(yaml, ec);
+  if (!*exists) {
+    if (error) *error = "no saved map at " + yaml;
+    return false;
+  }
+  try {
+    const YAML::Node map = YAML::LoadFile(yaml)["map"];
+    if (!map || !map.IsMap()) {
+      if (error) *error = yaml + " is not a saved map (no `map:` block)";
+      return false;
+    }
+    *session = map["session"].as<std::string>("");
+    return true;
+  } catch (const std::exception& e) {
+    if (error) *error = yaml + ": " + e.what();
+    return false;
+  }
 }
 
 }  // namespace geofusion

@@ -334,6 +334,9 @@ bool writeRunResults(const std::string& path, const RunResults& r, std::string* 
   if (!r.map_id.empty()) {
     out << YAML::Key << "map" << YAML::Value << YAML::BeginMap;
     out << YAML::Key << "id" << YAML::Value << r.map_id;
+    out << YAML::Key << "session" << YAML::Value << r.session;
+    out << YAML::Key << "keyframes_total" << YAML::Value << r.keyframes_total;
+    out << YAML::Key << "next_object_id" << YAML::Value << r.next_object_id;
     yaml_io::emitPose(out, "map_odom", r.T_map_odom);
     out << YAML::Key << "background" << YAML::Value << YAML::BeginMap;
     out << YAML::Key << "file" << YAML::Value << r.background_file;
@@ -466,6 +469,9 @@ bool readRunResults(const std::string& path, const ModelSet& models, RunResults*
     }
     if (const YAML::Node m = root["map"]) {
       r.map_id = m["id"].as<std::string>();
+      r.session = m["session"].as<std::string>("");
+      r.keyframes_total = m["keyframes_total"].as<int>(0);
+      r.next_object_id = m["next_object_id"].as<int>(0);
       r.T_map_odom = yaml_io::parsePose(m["map_odom"], "map map_odom");
       r.background_file = m["background"]["file"].as<std::string>("");
       r.background_bytes = m["background"]["bytes"].as<std::uint64_t>(0);

@@ -136,9 +136,10 @@ void SceneEstimator::setConfig(const EstimatorConfig& config) {
 }
 
 bool SceneEstimator::resume(const std::vector<ObjectEstimate>& objects,
-                            const Eigen::Isometry3d& T_map_odom) {
+                            const Eigen::Isometry3d& T_map_odom, int next_object_id) {
   if (!T_map_cam_.empty()) return false;
   tracks_.clear();
+  next_id_ = std::max(next_id_, next_object_id);
   for (const ObjectEstimate& o : objects) {
     if (!o.model || !o.T_map_obj.matrix().allFinite()) continue;
     Track& tr = startTrack(o.model, o.T_map_obj, -1);
@@ -856,6 +857,10 @@ StageReport SceneEstimator::runRelationsAndStageTwo(const Keyframe* kf, StageTim
     if (!tr.confirmed) tr.T_refined = tr.T_stage_one;
   if (timings) timings->stage_two_ms = msSince(t0);
   return {s.status, s.iterations, s.initial_cost, s.final_cost};
+}
+
+KeyframeResult SceneEstimator::snapshot() const {
+  return result(static_cast<int>(T_map_cam_.size()) - 1, stamps_.empty() ? 0.0 : stamps_.back());
 }
 
 KeyframeResult SceneEstimator::finish() {

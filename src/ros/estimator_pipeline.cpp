@@ -35,9 +35,14 @@ void EstimatorPipeline::reset() {
   resumed_ = RunResults();
 }
 
-RunResults EstimatorPipeline::currentMap() {
+RunResults EstimatorPipeline::currentMap(bool final_solve) {
   RunResults map;
-  map.final_map = estimator_->numKeyframes() > 0 ? estimator_->finish() : resumed_.final_map;
+  const bool mapped = estimator_->numKeyframes() > 0;
+  map.final_map = !mapped       ? resumed_.final_map
+                  : final_solve ? estimator_->finish()
+                                : estimator_->snapshot();
+  map.keyframes_total = resumed_.keyframes_total + estimator_->numKeyframes();
+  map.next_object_id = estimator_->nextObjectId();
   map.trajectory = estimator_->trajectory();
   map.trajectory_stamps = estimator_->keyframeStamps();
   map.support_plane = estimator_->supportPlane();
@@ -76,7 +81,7 @@ bool EstimatorPipeline::loadMap(const std::string& path, const ModelSet& models,
         [&](BackgroundMap& map) { read = map.readBinary(files.background, error); });
   }
   if (!read) return false;
-  estimator_->resume(map.final_map.objects, map.T_map_odom);
+  estimator_->resume(map.final_map.objects, map.T_map_odom, map.next_object_id);
   resumed_ = map;
   if (loaded) *loaded = std::move(map);
   return true;

@@ -20,6 +20,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
 
 namespace geofusion {
 
@@ -36,10 +38,12 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
 
   diagnostics_.setHardwareID("geofusion");
   diagnostics_.add("scene estimator", this, &SceneEstimatorNode::diagnose);
+  diagnostics_.add("map autosave", this, &SceneEstimatorNode::diagnoseAutosave);
   diagnostics_timer_ = pnh_.createWallTimer(
       ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) { diagnostics_.force_update(); });
 
   startOdometry();
+  startAutosave();
   loadInitialMap();
   startFrames();
   ROS_INFO_STREAM("geofusion: scene estimator (" << method_name_ << ", " << models.size()
@@ -51,7 +55,8 @@ SceneEstimatorNode::SceneEstimatorNode(ros::NodeHandle nh, ros::NodeHandle pnh)
 void SceneEstimatorNode::readParameters() {
   pnh_.param<std::string>("map_frame", map_frame_, kMapFrame);
   pnh_.param<std::string>("odom_frame", odom_frame_, kOdomFrame);
-  config_ = loadNodeConfig(pnh_, {"odometry", "odom_topic", "initial_map"});
+  config_ = loadNodeConfig(pnh_, {"odometry", "odom_topic", "initial_map", "launch_id"});
+  pnh_.param<std::string>("launch_id", launch_id_, "");
   // Where odometry comes from is the launch file's choice (odometry:=tf|topic|visual).
   pnh_.param<std::string>("odom_topic", odom_topic_, "");
   std::string odometry = odom_topic_.empty() ? "tf" : "topic";  // a plain node: ~odom_topic says
@@ -142,7 +147,68 @@ void SceneEstimatorNode::startOdometry() {
   }
 }
 
+// node.autosave_*: the prefix ("" : $ROS_HOME/geofusion/<node namespace>/autosave), its folder
+// made now; a folder that cannot be made is reported here and by every failed autosave.
+void SceneEstimatorNode::startAutosave() {
+  MapAutosaver::Config c;
+  c.every_keyframes = config_.node.autosave_every_keyframes;
+  c.every_s = config_.node.autosave_every_s;
+  c.prefix = config_.node.autosave_prefix;
+  if (c.every_keyframes <= 0 && c.every_s <= 0.0) {
+    ROS_INFO("geofusion: autosave off (node.autosave_every_keyframes and _every_s are 0)");
+    return;
+  }
+  if (c.prefix.empty()) {
+    const char* ros_home = std::getenv("ROS_HOME");
+    const char* home = std::getenv("HOME");
+    std::string node = pnh_.getNamespace();
+    std::replace(node.begin(), node.end(), '/', '_');
+    c.prefix = (ros_home ? std::string(ros_home) : std::string(home ? home : ".") + "/.ros") +
+               "/geofusion/" + node.substr(node.find_first_not_of('_')) + "/autosave";
+  }
+  std::error_code ec;
+  std::filesystem::create_directories(std::filesystem::path(c.prefix).parent_path(), ec);
+  if (ec)
+    ROS_ERROR_STREAM("geofusion: autosave folder of " << c.prefix
+                                                      << " cannot be made: " << ec.message());
+  autosaver_ = std::make_unique<MapAutosaver>(
+      c, [this](const std::string& prefix, RunResults map, MapFiles* files, std::string* error) {
+        return pipeline_->saveMap(prefix, std::move(map), files, error);
+      });
+  ROS_INFO_STREAM("geofusion: autosave every " << c.every_keyframes << " keyframes or " << c.every_s
+                                               << " s to " << c.prefix << ".yaml");
+}
+
+// The autosave this launch wrote (same ~launch_id: the node was respawned) is continued; one
+// from another launch, or from a node started without ~launch_id, is left alone (it is
+// overwritten by the first autosave).
+bool SceneEstimatorNode::resumeAutosave() {
+  if (!autosaver_ || !config_.node.resume_autosave) return false;
+  const std::string& prefix = autosaver_->config().prefix;
+  std::string session, error, message;
+  switch (autosaveResume(prefix, launch_id_, &session, &error)) {
+    case AutosaveResume::kNone: return false;
+    case AutosaveResume::kUnreadable:
+      ROS_ERROR_STREAM("geofusion: autosave not resumed: " << error);
+      return false;
+    case AutosaveResume::kOtherLaunch:
+      ROS_INFO_STREAM("geofusion: the autosave " << prefix << ".yaml is from another launch ("
+                                                 << (session.empty() ? "unknown" : session)
+                                                 << "): not resumed, it will be overwritten");
+      return false;
+    case AutosaveResume::kResume: break;
+  }
+  int objects = 0;
+  if (!load(prefix, &message, &objects)) {
+    ROS_ERROR_STREAM("geofusion: this launch's autosave not resumed: " << message);
+    return false;
+  }
+  ROS_WARN_STREAM("geofusion: resumed after a restart: " << message);
+  return true;
+}
+
 void SceneEstimatorNode::loadInitialMap() {
+  if (resumeAutosave()) return;
   // ~initial_map: continue a saved map after a restart; one that cannot be loaded stops the
   // start (a robot must not silently begin from nothing when told to resume).
   std::string initial_map;
@@ -182,6 +248,7 @@ SceneEstimatorNode::~SceneEstimatorNode() {
   if (odom_spinner_) odom_spinner_->stop();
   odom_sub_.shutdown();
   tf_sub_.shutdown();
+  autosaver_.reset();  // writes a snapshot still waiting; it saves through pipeline_
   if (!save_on_shutdown_.empty()) {
     std::string message;
     std::vector<std::string> files;
@@ -251,6 +318,7 @@ void SceneEstimatorNode::onFrame(const sensor_msgs::ImageConstPtr& /*rgb*/,
     if (outcome != EstimatorPipeline::Outcome::kKeyframe) return;
     ++keyframes_;
     last_ = result;
+    autosaveIfDue();
     reportFailedStages(result);
     reportRelocalisation(result);
     if (!result.detection_warning.empty())
@@ -639,6 +707,53 @@ void SceneEstimatorNode::onOdometry(const nav_msgs::OdometryConstPtr& msg) {
   pipeline_->odometry().add(msg->header.stamp.toSec());
 }
 
+// A snapshot of the map (no solve: cheap) for the autosave's writer, when one is due.
+void SceneEstimatorNode::autosaveIfDue() {
+  if (!autosaver_) return;
+  const MapAutosaver::Status s = autosaver_->status();
+  if (s.failed > autosave_failures_reported_) {
+    autosave_failures_reported_ = s.failed;
+    ROS_WARN_STREAM_THROTTLE(warn_period_s_, "geofusion: autosave to "
+                                                 << autosaver_->config().prefix << " failed ("
+                                                 << s.failed << " so far): " << s.last_error
+                                                 << "; mapping goes on, the previous autosave "
+                                                    "is whole");
+  }
+  const double now_s = ros::WallTime::now().toSec();
+  if (!autosaver_->keyframeAdded(now_s)) return;
+  RunResults map = pipeline_->currentMap(false);
+  map.method = method_name_;
+  map.source = "scene_estimator_node autosave";
+  map.model_set = config_.model_set.name;
+  map.config_yaml = configYaml(config_);
+  map.session = launch_id_;
+  autosaver_->offer(std::move(map), now_s);
+}
+
+void SceneEstimatorNode::diagnoseAutosave(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  if (!autosaver_) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "off");
+    return;
+  }
+  const MapAutosaver::Status s = autosaver_->status();
+  if (!s.last_error.empty())
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                   "the last autosave failed (mapping goes on, the previous autosave is whole): " +
+                       s.last_error);
+  else if (s.saved == 0)
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "no autosave yet");
+  else
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "saved");
+  status.add("prefix", autosaver_->config().prefix);
+  status.add("autosaves", s.saved);
+  status.add("failed autosaves", s.failed);
+  status.add("keyframes in the last autosave", s.last_keyframes);
+  if (s.last_saved_s >= 0.0)
+    status.addf("seconds since the last autosave", "%.1f",
+                ros::WallTime::now().toSec() - s.last_saved_s);
+  status.add("launch id", launch_id_);
+}
+
 void SceneEstimatorNode::onTimeJump(const ros::Time& from, const ros::Time& to) {
   ROS_WARN_STREAM("geofusion: time jumped back from " << from << " to " << to
                                                       << " (a looping bag or restarted driver): "
@@ -665,6 +780,7 @@ bool SceneEstimatorNode::save(const std::string& prefix, std::string* message,
   map.source = "scene_estimator_node";
   map.model_set = config_.model_set.name;
   map.config_yaml = configYaml(config_);
+  map.session = launch_id_;
   const std::size_t objects = map.final_map.objects.size(),
                     contacts = map.final_map.contacts.size();
   MapFiles written;

@@ -7,28 +7,30 @@ import os
 import subprocess
 import sys
 import tempfile
-import time
 
 
-def free_display():
-    for n in range(91, 140):
-        if not os.path.exists('/tmp/.X%d-lock' % n) and \
-           not os.path.exists('/tmp/.X11-unix/X%d' % n):
-            return n
-    raise RuntimeError('no free X display number between :91 and :139')
+def start_xvfb():
+    """Xvfb on a display it finds free itself (-displayfd: it tries the numbers up from :0 and
+    says which one it took), so that runs in two chroots, which share the machine's abstract X
+    sockets but not /tmp, never pick the same number; returns (process, display number)."""
+    read_end, write_end = os.pipe()
+    xvfb = subprocess.Popen(['Xvfb', '-displayfd', str(write_end), '-screen', '0', '1400x1000x24',
+                             '-nolisten', 'tcp'], pass_fds=(write_end,),
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    os.close(write_end)
+    with os.fdopen(read_end) as f:
+        line = f.readline().strip()
+    if not line.isdigit():
+        xvfb.kill()
+        raise RuntimeError('Xvfb did not start (no display number from -displayfd)')
+    return xvfb, int(line)
 
 
 def main():
     out = os.environ.get('GEOFUSION_SCREENSHOT_DIR') or tempfile.mkdtemp(prefix='geofusion_shots_')
     os.makedirs(out, exist_ok=True)
-    n = free_display()
-    xvfb = subprocess.Popen(['Xvfb', ':%d' % n, '-screen', '0', '1400x1000x24', '-nolisten', 'tcp'],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    xvfb, n = start_xvfb()
     try:
-        for _ in range(50):
-            if os.path.exists('/tmp/.X11-unix/X%d' % n):
-                break
-            time.sleep(0.1)
         env = dict(os.environ, DISPLAY=':%d' % n, GEOFUSION_SCREENSHOT_DIR=out)
         rc = subprocess.call(['rostest', 'geofusion', 'rviz_screenshots.test'] + sys.argv[1:],
                              env=env)

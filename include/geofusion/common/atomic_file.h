@@ -6,7 +6,9 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <functional>
 #include <string>
@@ -35,25 +37,23 @@ inline bool writeFileAtomically(const std::string& path,
                                 const std::function<bool(const std::string&)>& write,
                                 std::string* error) {
   const std::string tmp = path + ".tmp";
-  if (!write(tmp)) {
+  // The system's reason (no space left, read-only file system, ...) when it gave one.
+  const auto fail = [&](const std::string& what) {
+    const int code = errno;
     std::remove(tmp.c_str());
-    if (error) *error = "cannot write " + tmp;
+    if (error) *error = what + (code != 0 ? std::string(": ") + std::strerror(code) : "");
     return false;
-  }
-  if (!syncToDisk(tmp)) {
-    std::remove(tmp.c_str());
-    if (error) *error = "cannot flush " + tmp + " to the disk";
-    return false;
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    if (error) *error = "cannot rename " + tmp + " to " + path;
-    return false;
-  }
-  if (!syncToDisk(directoryOf(path), true)) {
-    if (error) *error = "cannot flush the directory of " + path + " to the disk";
-    return false;
-  }
+  };
+  errno = 0;
+  if (!write(tmp)) return fail("cannot write " + tmp);
+  errno = 0;
+  if (!syncToDisk(tmp)) return fail("cannot flush " + tmp + " to the disk");
+  errno = 0;
+  if (std::rename(tmp.c_str(), path.c_str()) != 0)
+    return fail("cannot rename " + tmp + " to " + path);
+  errno = 0;
+  if (!syncToDisk(directoryOf(path), true))
+    return fail("cannot flush the directory of " + path + " to the disk");
   return true;
 }
 

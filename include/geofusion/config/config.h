@@ -40,6 +40,13 @@ struct InputConfig {
 struct NodeConfig {
   bool publish_map_to_odom = true;   ///< broadcast map -> odom at every keyframe
   std::string save_on_shutdown;      ///< save the map to this path prefix at shutdown ("": no)
+  /// Autosave (docs/running.md): the map saved as ~save_map does every N keyframes or T seconds
+  /// (whichever comes first, on a keyframe; both 0: off), under this prefix ("": $ROS_HOME/
+  /// geofusion/<node name>/autosave); resumed at start when the same launch wrote it.
+  int autosave_every_keyframes = 10;
+  double autosave_every_s = 60.0;
+  std::string autosave_prefix;
+  bool resume_autosave = true;
   int background_publish_every = 5;  ///< publish the background every N keyframes
   /// Every object of the map as a TF frame <object_frame_prefix><id> under the map frame, at
   /// every keyframe; a removed object's frame is no longer sent.

@@ -35,6 +35,11 @@ bool saveMap(const std::string& prefix, RunResults results,
 bool loadMap(const std::string& path, const ModelSet& models, RunResults* results, MapFiles* files,
              std::string* error);
 
+/// Who saved the map under `path` (RunResults::session) without loading it: false with `error`
+/// when there is no saved map there or it cannot be read; `exists` says whether the YAML is there.
+bool readSavedMapSession(const std::string& path, std::string* session, bool* exists,
+                         std::string* error);
+
 /// FNV-1a 64 of a file's bytes, 16 hex digits; empty when it cannot be read.
 std::string fileChecksum(const std::string& path, std::uint64_t* bytes = nullptr);
 

@@ -39,6 +39,12 @@ struct RunResults {
   /// A saved map (map_store.h): its id, the background file it belongs to (name beside the YAML,
   /// size, FNV-1a 64 checksum in hex; empty: none) and the last map -> odom correction.
   std::string map_id;
+  /// ... who saved it (the node's launch id: an autosave is resumed only by the launch that
+  /// wrote it; empty: unknown), how many keyframes the map had seen in all (resumed ones
+  /// included) and the next object id (a resumed map never gives an id out twice).
+  std::string session;
+  int keyframes_total = 0;
+  int next_object_id = 0;
   std::string background_file, background_checksum;
   std::uint64_t background_bytes = 0;
   Eigen::Isometry3d T_map_odom = Eigen::Isometry3d::Identity();

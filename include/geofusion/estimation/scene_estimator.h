@@ -206,9 +206,15 @@ class SceneEstimator {
   /// continue in the same odom frame). The support plane is found again from the first keyframe
   /// (a saved one has its normal and height only). False, changing nothing, once a keyframe was
   /// added.
-  bool resume(const std::vector<ObjectEstimate>& objects, const Eigen::Isometry3d& T_map_odom);
+  /// `next_object_id`: the saved map's next id (ids are never given out twice).
+  bool resume(const std::vector<ObjectEstimate>& objects, const Eigen::Isometry3d& T_map_odom,
+              int next_object_id = 0);
   /// Final stage I and stage II over everything (the map a run ends with).
   KeyframeResult finish();
+  /// The map as the last keyframe left it, without the final solve (what an autosave keeps).
+  KeyframeResult snapshot() const;
+  /// The id the next new object will get.
+  int nextObjectId() const { return next_id_; }
   void reset();
 
   const EstimatorConfig& config() const { return config_; }

@@ -95,8 +95,9 @@ class EstimatorPipeline {
 
   /// The map as it stands, ready for saveMap (map_store.h): the final solve's objects and
   /// contacts, the trajectory, the support plane, map -> odom, and the frames and detections
-  /// used and dropped by reason.
-  RunResults currentMap();
+  /// used and dropped by reason. `final_solve` false: the objects and contacts as the last
+  /// keyframe left them, without a last stage I and II (an autosave, cheap on the frame thread).
+  RunResults currentMap(bool final_solve = true);
   /// Saves currentMap() and the background as one unit under `prefix`.
   bool saveMap(const std::string& prefix, RunResults map, MapFiles* files, std::string* error);
   /// Starts over from the map saved under `path` (map_store.h's loadMap): the estimator resumes

@@ -6,6 +6,7 @@
 
 #include "geofusion/config/config.h"
 #include "geofusion/ros/estimator_pipeline.h"
+#include "geofusion/ros/map_autosaver.h"
 #include "geofusion/ros/rgbd_subscriber.h"
 
 #include <diagnostic_updater/diagnostic_updater.h>
@@ -47,7 +48,8 @@ class SceneEstimatorNode {
   void advertise();         // publishers, services, the background's publication
   void startReconfigure();  // dynamic_reconfigure, from the loaded configuration
   void startOdometry();     // odometry samples on their own queue and thread
-  void loadInitialMap();    // ~initial_map; throws when it cannot be loaded
+  void startAutosave();     // node.autosave_*: where, and the writer
+  void loadInitialMap();    // this launch's autosave, else ~initial_map; throws when it cannot
   void startFrames();       // the frame thread and the subscriber
   /// A synchronised set, from the subscriber's callback to the frame thread.
   struct FrameSet {
@@ -78,6 +80,9 @@ class SceneEstimatorNode {
   bool onReset(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   void onReconfigure(geofusion::SceneEstimatorConfig& config, uint32_t level);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
+  void diagnoseAutosave(diagnostic_updater::DiagnosticStatusWrapper& status);
+  bool resumeAutosave();  // loads this launch's autosave; false when there is none to resume
+  void autosaveIfDue();   // after a keyframe, mutex_ held
   bool save(const std::string& prefix, std::string* message, std::vector<std::string>* files);
   bool load(const std::string& path, std::string* message, int* objects);
   bool onLoad(geofusion::LoadMap::Request& req, geofusion::LoadMap::Response& res);
@@ -88,6 +93,11 @@ class SceneEstimatorNode {
   double warn_period_s_ = 5.0;
   bool publish_tf_ = true;
   std::string save_on_shutdown_;
+  // ~launch_id (the launch file's $(anon ...): the same for a respawned node, new for a new
+  // launch) is written into every save; an autosave is resumed only by the launch that wrote it.
+  std::string launch_id_;
+  std::unique_ptr<MapAutosaver> autosaver_;     // null when node.autosave_* are both 0
+  std::size_t autosave_failures_reported_ = 0;  // under mutex_
   std::string method_name_;
   GeoFusionConfig config_;  // the effective configuration (reconfigure changes it); under mutex_
 

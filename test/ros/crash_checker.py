@@ -1,0 +1,228 @@
+#!/usr/bin/python3
+"""Issue 52: a map that survives a crash. The demo recording is replayed through the robot's
+launch (geofusion.launch: the nodelet manager and its nodelets respawn) once whole, then again
+with the nodelet manager SIGKILLed in the middle: the respawned estimator resumes from its
+autosave and the final map has the same objects (ids, classes) as the uninterrupted run, poses
+within 2 mm ADD-S, and at most one autosave period of keyframes lost. Then the autosave folder
+becomes a full and then a read-only tmpfs: a diagnostic says so, mapping goes on, and the
+previous autosave stays whole (it loads)."""
+import math
+import os
+import shutil
+import signal
+import subprocess
+import tempfile
+import threading
+import time
+import unittest
+import xmlrpc.client
+
+import rosgraph
+import rospy
+import rostest
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from geofusion.msg import ObjectMap
+from geofusion.srv import LoadMap, SaveMap
+
+import geofusion_test_utils as util
+
+NS = '/scene_estimator'
+MANAGER = '/geofusion_manager'
+KEYFRAMES = 80
+AUTOSAVE_EVERY = 4  # test/ros/config/autosave.yaml
+AUTOSAVE_DIR = '/tmp/geofusion_autosave_test'  # ... its autosave_prefix's folder
+AUTOSAVE = AUTOSAVE_DIR + '/autosave'
+ADDS_MAX_M = 0.002
+
+
+def box_points(size, n=5):
+    """Points on the surface of a box of edge lengths `size`, centred on its origin."""
+    pts = []
+    for axis in range(3):
+        for sign in (-0.5, 0.5):
+            for i in range(n):
+                for j in range(n):
+                    p = [0.0, 0.0, 0.0]
+                    u, v = [a for a in range(3) if a != axis]
+                    p[axis] = sign * size[axis]
+                    p[u] = (i / (n - 1) - 0.5) * size[u]
+                    p[v] = (j / (n - 1) - 0.5) * size[v]
+                    pts.append(p)
+    return pts
+
+
+def transform(pose, p):
+    x, y, z, qx, qy, qz, qw = pose
+    r = util.rotation(qx, qy, qz, qw)
+    return [sum(r[i][k] * p[k] for k in range(3)) + (x, y, z)[i] for i in range(3)]
+
+
+def adds(pose_a, pose_b, size):
+    """ADD-S of two poses of one box: mean distance of each posed point of a to the closest of b."""
+    pts = box_points(size)
+    a = [transform(pose_a, p) for p in pts]
+    b = [transform(pose_b, p) for p in pts]
+    return sum(min(math.dist(p, q) for q in b) for p in a) / len(a)
+
+
+def final_objects(path):
+    """{id: (class_name, pose)} of a saved map's final map."""
+    saved = util.load_yaml(path)
+    return {o['id']: (o['class_name'], o['map_object']) for o in saved['final_map']['objects']}
+
+
+def manager_pid():
+    """The nodelet manager's process id, or None when it is not up."""
+    try:
+        api = rosgraph.Master('/crash_checker').lookupNode(MANAGER)
+        code, _, pid = xmlrpc.client.ServerProxy(api).getPid('/crash_checker')
+        return pid if code == 1 else None
+    except (OSError, xmlrpc.client.Error, rosgraph.MasterError):
+        return None
+
+
+class CrashTest(unittest.TestCase):
+    def setUp(self):
+        self.lock = threading.Lock()
+        self.maps, self.autosave_status, self.sizes = [], [], {}
+        rospy.Subscriber(NS + '/object_map', ObjectMap, self.on_map, queue_size=200)
+        rospy.Subscriber('/diagnostics', DiagnosticArray, self.on_diagnostics, queue_size=100)
+        self.dir = tempfile.mkdtemp(prefix='geofusion_crash_')
+        self.bag = util.generate_demo(self.dir, KEYFRAMES)
+        self.assertTrue(util.wait_for_graph(util.INPUT_TOPICS, [NS + '/object_map']),
+                        'the estimator did not come up')
+        time.sleep(1.0)
+
+    def tearDown(self):
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+    def on_map(self, msg):
+        with self.lock:
+            self.maps.append(msg)
+            for o in msg.objects:
+                self.sizes[o.class_name] = (o.bbox_size.x, o.bbox_size.y, o.bbox_size.z)
+
+    def on_diagnostics(self, msg):
+        with self.lock:
+            self.autosave_status += [s for s in msg.status if 'map autosave' in s.name]
+
+    def map_count(self):
+        with self.lock:
+            return len(self.maps)
+
+    def save(self, name):
+        rospy.wait_for_service(NS + '/save_map', timeout=30)
+        res = rospy.ServiceProxy(NS + '/save_map', SaveMap)(os.path.join(self.dir, name))
+        self.assertTrue(res.success, res.message)
+        return os.path.join(self.dir, name + '.yaml')
+
+    def last_autosave(self, since):
+        """The last autosave diagnostic after index `since` of the list, as {key: value}."""
+        with self.lock:
+            status = self.autosave_status[since:]
+        if not status:
+            return None, {}
+        return status[-1], {kv.key: kv.value for kv in status[-1].values}
+
+    def test_a_crash_resumes_from_the_autosave(self):
+        util.play(self.bag)
+        self.assertTrue(util.wait_until(lambda: self.map_count() >= KEYFRAMES - 2, 30))
+        time.sleep(1.0)
+        reference = final_objects(self.save('reference'))
+        self.assertGreaterEqual(len(reference), 8, 'the uninterrupted run mapped too little')
+
+        before = self.map_count()
+        pid = manager_pid()
+        self.assertIsNotNone(pid, 'no nodelet manager ' + MANAGER)
+        player = util.play_async(self.bag)
+        self.assertTrue(util.wait_until(lambda: self.map_count() - before >= KEYFRAMES // 2, 60))
+        os.kill(pid, signal.SIGKILL)
+        processed = self.map_count() - before
+        saved = util.load_yaml(AUTOSAVE + '.yaml')['map']
+        lost = processed - saved['keyframes_total']
+        killed_at = self.map_count()
+        # The respawned manager reloads the estimator, which resumes and publishes the map.
+        self.assertTrue(util.wait_until(lambda: manager_pid() not in (None, pid), 60),
+                        'the nodelet manager was not respawned')
+        self.assertTrue(util.wait_until(lambda: self.map_count() > killed_at + 1, 60),
+                        'the respawned estimator publishes no map')
+        resumed_at = self.map_count()
+        player.wait()
+        self.assertTrue(util.wait_until(lambda: self.map_count() > resumed_at + 5, 30))
+        time.sleep(1.0)
+        crashed = final_objects(self.save('crashed'))
+        print('crash: %d keyframes processed before the kill, the autosave had %d: %d lost '
+              '(autosave every %d); %d maps published after the respawn; objects %d / %d'
+              % (processed, saved['keyframes_total'], lost, AUTOSAVE_EVERY,
+                 self.map_count() - killed_at, len(crashed), len(reference)))
+        self.assertNotEqual(saved['session'], '', 'the autosave names no launch')
+        self.assertLessEqual(lost, AUTOSAVE_EVERY)
+        # Ids are never given out twice, so the second replay's start where the first's ended:
+        # the same objects have the same ids up to that one offset.
+        self.assertEqual(len(crashed), len(reference), 'not the same number of objects')
+        worst, offsets = 0.0, set()
+        for oid, (name, pose) in reference.items():
+            candidates = [(math.dist(pose[:3], p[:3]), cid) for cid, (n, p) in crashed.items()
+                          if n == name]
+            self.assertTrue(candidates, 'no %s in the resumed map' % name)
+            distance, cid = min(candidates)
+            self.assertLess(distance, 0.03, 'object %d (%s) not in the resumed map' % (oid, name))
+            offsets.add(cid - oid)
+            error = adds(pose, crashed[cid][1], self.sizes[name])
+            worst = max(worst, error)
+            self.assertLess(error, ADDS_MAX_M, 'object %d (%s) ADD-S %.2f mm against the '
+                            'uninterrupted run' % (oid, name, 1000 * error))
+        self.assertEqual(len(offsets), 1, 'object ids differ beyond the replay offset: %s'
+                         % sorted(offsets))
+        print('crash: largest ADD-S against the uninterrupted run %.2f mm' % (1000 * worst))
+
+    def test_b_full_and_read_only_disk(self):
+        mount = ['mount', '-t', 'tmpfs', '-o', 'size=4m', 'tmpfs', AUTOSAVE_DIR]
+        if subprocess.call(mount, stderr=subprocess.DEVNULL) != 0:
+            self.skipTest('cannot mount a tmpfs on %s here (not root, or no mount '
+                          'privilege): the full-disk check needs one' % AUTOSAVE_DIR)
+        try:
+            self.full_and_read_only()
+        finally:
+            subprocess.call(['umount', '-l', AUTOSAVE_DIR])
+
+    def full_and_read_only(self):
+        # A fresh, writable tmpfs: the autosaves land there.
+        util.play(self.bag)
+        self.assertTrue(util.wait_until(lambda: os.path.exists(AUTOSAVE + '.yaml'), 30),
+                        'no autosave on the tmpfs')
+        time.sleep(2.0)
+        with open(AUTOSAVE + '.yaml') as f:
+            whole = f.read()
+        # Full: a file takes the space left.
+        with open(os.path.join(AUTOSAVE_DIR, 'filler'), 'wb') as f:
+            try:
+                while True:
+                    f.write(b'\0' * 65536)
+                    f.flush()
+            except OSError:
+                pass
+        for expected in ('No space left on device', 'Read-only file system'):
+            since, before = len(self.autosave_status), self.map_count()
+            util.play(self.bag)
+            self.assertTrue(util.wait_until(
+                lambda: expected in (self.last_autosave(since)[0] or DiagnosticStatus()).message,
+                15), 'no diagnostic says "%s": %s' % (expected, self.last_autosave(since)[0]))
+            status, values = self.last_autosave(since)
+            self.assertEqual(status.level, DiagnosticStatus.WARN)
+            self.assertGreater(int(values['failed autosaves']), 0)
+            self.assertGreaterEqual(self.map_count() - before, KEYFRAMES - 5,
+                                    'mapping stopped with the autosave failing')
+            with open(AUTOSAVE + '.yaml') as f:
+                self.assertEqual(f.read(), whole, 'the previous autosave changed')
+            print('disk: "%s" reported, %d maps published meanwhile'
+                  % (status.message, self.map_count() - before))
+            if expected.startswith('No space'):
+                subprocess.check_call(['mount', '-o', 'remount,ro', AUTOSAVE_DIR])
+        res = rospy.ServiceProxy(NS + '/load_map', LoadMap)(AUTOSAVE)
+        self.assertTrue(res.success, 'the previous autosave does not load: ' + res.message)
+
+
+if __name__ == '__main__':
+    rospy.init_node('crash_checker')
+    rostest.rosrun('geofusion', 'scene_estimator_crash', CrashTest)
