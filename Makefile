@@ -9,15 +9,16 @@
 #                                latency frame -> map, drops, CPU; report in results/live/
 #   make vo-bench                the visual odometry benchmark, report in results/vo/
 #   make test-asan               every test built with ASan + UBSan in its own workspace, run by ctest
+#   make test-tsan               the same with ThreadSanitizer (its own workspace; docs/tests.md)
 #   make fuzz [FUZZ_RUNS=N]      libFuzzer (clang 14) on the input parsers, 1000000 runs per target
 #   make screenshots             the rviz screenshots of README and docs/running.md (docs/images) by the rviz_screenshots test
 #   make soak [SOAK_KEYFRAMES=N] a long run (tables revisited): time and memory per keyframe, plots
 #   make test-platforms [RELEASES="bullseye trixie"]  build + every test in Debian 11 / 13 chroots
 #                                (catkin_make in a fresh workspace; root; docs/tests.md)
-.PHONY: demo test test-asan fuzz data bench bench-real live-bench vo-bench screenshots soak test-platforms deps build lint clean help
+.PHONY: demo test test-asan test-tsan fuzz data bench bench-real live-bench vo-bench screenshots soak test-platforms deps build lint clean help
 
 help:
-	@sed -n '2,16p' Makefile
+	@sed -n '2,17p' Makefile
 
 deps:
 	@bash scripts/install_deps.sh
@@ -29,7 +30,10 @@ test: build
 	@bash scripts/test.sh
 
 test-asan:
-	@bash scripts/test_asan.sh
+	@bash scripts/test_sanitizer.sh address
+
+test-tsan:
+	@bash scripts/test_sanitizer.sh thread
 
 fuzz:
 	@bash scripts/fuzz.sh

@@ -6,7 +6,7 @@ source "$(dirname "$0")/env.sh"
 mkdir -p "$GEOFUSION_WS/src" "$ROS_HOME"
 ln -sfn "$GEOFUSION_SRC" "$GEOFUSION_WS/src/geofusion"
 cd "$GEOFUSION_WS"
-# Extra CMake arguments, none by default (scripts/test_asan.sh passes the sanitizer flags): shell
+# Extra CMake arguments, none by default (scripts/test_sanitizer.sh passes the sanitizer flags): shell
 # words in GEOFUSION_CMAKE_ARGS, quotes allowed: -DCMAKE_BUILD_TYPE=Debug "-DCMAKE_CXX_FLAGS=-a -b".
 mapfile -d '' -t EXTRA_CMAKE_ARGS < <(printf '%s' "${GEOFUSION_CMAKE_ARGS:-}" | xargs -r printf '%s\0')
 say "building in $GEOFUSION_WS (catkin_make -j2$(command -v ccache >/dev/null && echo ', ccache'))"

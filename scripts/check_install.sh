@@ -59,7 +59,7 @@ assert e[\"final_map\"][\"matched\"] > 0, e[\"final_map\"]; \
 assert e[\"config\"][\"method\"] == \"geofusion\"; \
 print(\"check_install: run from the install space: %d objects matched, config recorded\" % e[\"final_map\"][\"matched\"])" "$work/eval.json"
   # The Python module from the install space, with the installed configuration template (under
-  # scripts/test_asan.sh with the sanitizer runtimes preloaded: the interpreter is not instrumented).
+  # scripts/test_sanitizer.sh with the sanitizer runtimes preloaded: the interpreter is not instrumented).
   LD_PRELOAD="$GEOFUSION_SANITIZER_PRELOAD" ASAN_OPTIONS=detect_leaks=0 /usr/bin/python3 -c "import sys, geofusion.core as gf; \
 assert gf.__file__.startswith(sys.argv[1]), gf.__file__; \
 e = gf.SceneEstimator(gf.load_model_set(), sys.argv[2]); \

@@ -335,8 +335,12 @@ bool BackgroundMap::writeBinary(const std::string& path, std::string* error) con
   return writeFileAtomically(
       path,
       [&](const std::string& tmp) {
+        // Our own stream: a file that cannot be opened (a full disk, a read-only folder) fails
+        // here with errno kept, not with OctoMap's unthrottled message on every attempt.
+        std::ofstream file(tmp, std::ios::binary);
+        if (!file) return false;
         octomap::OcTree copy(impl_->tree);  // writeBinary prunes: keep ours as it is
-        return copy.writeBinary(tmp);
+        return copy.writeBinary(file) && static_cast<bool>(file.flush());
       },
       error);
 }

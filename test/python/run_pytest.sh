@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# pytest on the given files (ctest python_module). Under scripts/test_asan.sh the sanitizer
+# pytest on the given files (ctest python_module). Under scripts/test_sanitizer.sh the sanitizer
 # runtimes are preloaded (GEOFUSION_SANITIZER_PRELOAD): python3 is not instrumented, the
 # geofusion.core it imports is, and ASan must come first in the process.
 set -euo pipefail

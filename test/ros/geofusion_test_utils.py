@@ -65,7 +65,7 @@ def wait_until(condition, timeout_s=15.0, poll_s=0.1):
 def throughput_rate(rate):
     """The replay rate for a test whose pass depends on how fast the code runs (the estimator must
     keep up, or fall behind by a bounded amount): rate divided by GEOFUSION_TEST_SLOWDOWN, which
-    scripts/test_asan.sh sets for its instrumented build (several times slower); 1 otherwise."""
+    scripts/test_sanitizer.sh sets for its instrumented build (several times slower); 1 otherwise."""
     return rate / float(os.environ.get('GEOFUSION_TEST_SLOWDOWN', '1'))
 
 

@@ -1,8 +1,15 @@
 #!/usr/bin/env bash
 # Every test (lint, the gtests, the Python checkers, the rostests: all that ctest runs) built with
-# AddressSanitizer + UndefinedBehaviorSanitizer (gcc, RelWithDebInfo) in a workspace of its own
-# ($GEOFUSION_ASAN_WS, default ~/.cache/geofusion/ws-asan, with its own data and ccache folders),
-# then run by ctest. Exits non-zero when a test fails or any process left a sanitizer report.
+# a sanitizer (gcc, RelWithDebInfo) in a workspace of its own, then run by ctest. Exits non-zero
+# when a test fails or any process left a sanitizer report.
+#   address (make test-asan): AddressSanitizer + UndefinedBehaviorSanitizer, workspace
+#     $GEOFUSION_ASAN_WS (default ~/.cache/geofusion/ws-asan), its own data and ccache folders.
+#   thread (make test-tsan): ThreadSanitizer, workspace $GEOFUSION_TSAN_WS (default
+#     ~/.cache/geofusion/ws-tsan). Every multi-threaded path runs in it: consistency scoring on
+#     several threads (test_core), the background worker, the autosave writer, the nodelets under
+#     rostest. Suppressions (scripts/sanitizers/tsan.supp) only for third-party code, each named
+#     with the report it hides. TSan needs the address space laid out without randomisation on
+#     kernels with many mmap random bits: ctest runs under `setarch -R` (children inherit it).
 #   - Reports go to files (log_path), because a nodelet manager that dies in its shutdown does not
 #     fail its rostest: the script prints every report at the end and fails on any.
 #   - Suppressions: scripts/sanitizers/lsan.supp and ubsan.supp, each entry with its reason.
@@ -10,22 +17,36 @@
 #     sanitizer runtimes must be loaded first: a `nodelet` wrapper in this workspace's devel space
 #     puts them in LD_PRELOAD for the nodelet processes only (Python and the other uninstrumented
 #     ROS tools are left as they are).
-# Usage: scripts/test_asan.sh [ctest arguments, e.g. -R test_core]
+# Usage: scripts/test_sanitizer.sh address|thread [ctest arguments, e.g. -R test_core]
 set -euo pipefail
+mode="${1:-}"
+shift || true
 root="${XDG_CACHE_HOME:-$HOME/.cache}/geofusion"
-export GEOFUSION_WS="${GEOFUSION_ASAN_WS:-$root/ws-asan}"
+case "$mode" in
+  address) export GEOFUSION_WS="${GEOFUSION_ASAN_WS:-$root/ws-asan}" ;;
+  thread) export GEOFUSION_WS="${GEOFUSION_TSAN_WS:-$root/ws-tsan}" ;;
+  *) echo "usage: scripts/test_sanitizer.sh address|thread [ctest arguments]" >&2; exit 2 ;;
+esac
 source "$(dirname "$0")/env.sh"
 export GEOFUSION_WS ROS_HOME
 # Its own data (bench_demo generates the demo suite with the instrumented generator) and ccache
 # folder (the instrumented objects would otherwise push the normal build's out of the cache).
 export GEOFUSION_DATA="$GEOFUSION_WS/data"
-export CCACHE_DIR="${GEOFUSION_ASAN_CCACHE_DIR:-$root/ccache-asan}"
-sanitize="-fsanitize=address,undefined"
+if [ "$mode" = address ]; then
+  export CCACHE_DIR="${GEOFUSION_ASAN_CCACHE_DIR:-$root/ccache-asan}"
+  sanitize="-fsanitize=address,undefined"
+  runtime_pattern='lib(asan|ubsan)\.so'
+else
+  export CCACHE_DIR="${GEOFUSION_TSAN_CCACHE_DIR:-$root/ccache-tsan}"
+  sanitize="-fsanitize=thread"
+  runtime_pattern='libtsan\.so'
+fi
 # EIGEN_MALLOC_ALREADY_ALIGNED=1: under gcc's ASan (__SANITIZE_ADDRESS__) Eigen switches to its own
 # aligned allocator, while Debian's uninstrumented PCL and Ceres allocate with plain malloc; an
 # Eigen-aligned vector allocated there and freed here (pcl::PointCloud) is then a false
 # heap-buffer-overflow. Keep the libraries' allocator, as in the normal build.
-flags="$sanitize -fno-omit-frame-pointer -fno-sanitize-recover=undefined -DEIGEN_MALLOC_ALREADY_ALIGNED=1"
+flags="$sanitize -fno-omit-frame-pointer -DEIGEN_MALLOC_ALREADY_ALIGNED=1"
+[ "$mode" = address ] && flags="$flags -fno-sanitize-recover=undefined"
 # --as-needed: Debian's gcc links with it, except with -fsanitize; without it the libraries keep
 # every dependency PCL lists (VTK, Qt, GLVND's libOpenGL ahead of libOSMesa), the renderer's GL
 # calls bind to libOpenGL and "the OSMesa renderer could not start".
@@ -36,7 +57,7 @@ link="$sanitize -Wl,--as-needed"
 mkdir -p "$GEOFUSION_WS"
 defaults="$GEOFUSION_WS/sanitizer_defaults"
 {
-  echo '// Written by scripts/test_asan.sh from scripts/sanitizers/lsan.supp.'
+  echo '// Written by scripts/test_sanitizer.sh from scripts/sanitizers/lsan.supp.'
   echo 'extern "C" const char* __lsan_default_suppressions() {'
   echo '  return R"supp('
   cat "$GEOFUSION_SRC/scripts/sanitizers/lsan.supp"
@@ -68,9 +89,9 @@ bash "$GEOFUSION_SRC/scripts/python_env.sh"  # pycocotools for the benchmark tes
 
 # The runtimes the instrumented libraries link (as the linker resolved them).
 nodelets="$GEOFUSION_WS/devel/lib/libgeofusion_nodelets.so"
-runtimes=$(ldd "$nodelets" | awk '/lib(asan|ubsan)\.so/ {print $3}' | sort | tr '\n' ' ')
-case "$runtimes" in
-  *libasan*libubsan*) ;;
+runtimes=$(ldd "$nodelets" | awk -v re="$runtime_pattern" '$0 ~ re {print $3}' | sort | tr '\n' ' ')
+case "$mode:$runtimes" in
+  address:*libasan*libubsan*|thread:*libtsan*) ;;
   *) say "$nodelets is not instrumented (runtimes: '$runtimes'); remove $GEOFUSION_WS and retry"; exit 1 ;;
 esac
 
@@ -85,7 +106,7 @@ write_wrapper() {  # package, environment assignments for it
   mkdir -p "$(dirname "$path")"
   cat > "$path" <<WRAPPER
 #!/bin/sh
-# Written by scripts/test_asan.sh: Debian's $pkg with the sanitizer runtimes loaded first.
+# Written by scripts/test_sanitizer.sh: Debian's $pkg with the sanitizer runtimes loaded first.
 echo "\$\$ $pkg \$*" >> "$wrapper_log"
 $env LD_PRELOAD="$runtimes\${LD_PRELOAD:-}" exec /usr/lib/$pkg/$pkg "\$@"
 WRAPPER
@@ -122,15 +143,19 @@ supp="$GEOFUSION_SRC/scripts/sanitizers"
 export ASAN_OPTIONS="log_path=$reports/asan:detect_leaks=1:halt_on_error=1:detect_stack_use_after_return=0:strict_string_checks=0:check_initialization_order=1:print_suppressions=0"
 export LSAN_OPTIONS="suppressions=$supp/lsan.supp:print_suppressions=0"
 export UBSAN_OPTIONS="log_path=$reports/ubsan:suppressions=$supp/ubsan.supp:print_stacktrace=1:halt_on_error=1"
+# TSan: every race reported (not only the first), the process goes on.
+export TSAN_OPTIONS="log_path=$reports/tsan:suppressions=$supp/tsan.supp:print_suppressions=0:halt_on_error=0:second_deadlock_stack=1:history_size=4"
 
 cd "$GEOFUSION_WS/build"
-say "ctest with AddressSanitizer + UndefinedBehaviorSanitizer (reports: $reports)"
+say "ctest with -fsanitize=${sanitize#-fsanitize=} (reports: $reports)"
 start=$(date +%s)
 status=0
+setarch=()
+[ "$mode" = thread ] && setarch=(setarch "$(uname -m)" -R)
 # A test failing on time alone gets a second try: instrumented, the visual odometry nodelet can
 # fall behind the replayed bag on a busy 2-core machine (scene_estimator_visual_odometry's
 # "frames were skipped"). A sanitizer report fails the run all the same.
-ctest --output-on-failure --repeat until-pass:2 "$@" || status=$?
+"${setarch[@]}" ctest --output-on-failure --repeat until-pass:2 "$@" || status=$?
 run_s=$(( $(date +%s) - start ))
 
 shopt -s nullglob
