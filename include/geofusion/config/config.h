@@ -38,8 +38,8 @@ struct InputConfig {
 
 /// What only the ROS node does with the map (plain data: the core never reads it).
 struct NodeConfig {
-  bool publish_map_to_odom = true;   ///< broadcast map -> odom at every keyframe
-  std::string save_on_shutdown;      ///< save the map to this path prefix at shutdown ("": no)
+  bool publish_map_to_odom = true;  ///< broadcast map -> odom at every keyframe
+  std::string save_on_shutdown;     ///< save the map to this path prefix at shutdown ("": no)
   /// Autosave (docs/running.md): the map saved as ~save_map does every N keyframes or T seconds
   /// (whichever comes first, on a keyframe; both 0: off), under this prefix ("": $ROS_HOME/
   /// geofusion/<node name>/autosave); resumed at start when the same launch wrote it.
