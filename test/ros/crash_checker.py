@@ -192,7 +192,9 @@ class CrashTest(unittest.TestCase):
                                            AUTOSAVE_EVERY, self.map_count() - killed_at,
                                            len(crashed), len(reference), len(kept)))
         self.assertNotEqual(saved['session'], '', 'the autosave names no launch')
-        self.assertLessEqual(lost, AUTOSAVE_EVERY)
+        # At most one period, and the keyframe that came while the last snapshot was still being
+        # written (its fsync) when the kill landed.
+        self.assertLessEqual(lost, AUTOSAVE_EVERY + 1)
         # Every object the autosave held keeps its id and class through the crash. (Against the
         # uninterrupted run the objects are matched by class and place: which ids a live replay
         # gives out depends on the candidates it made and dropped, a matter of timing.)
