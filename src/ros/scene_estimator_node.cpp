@@ -235,6 +235,7 @@ void SceneEstimatorNode::startFrames() {
 }
 
 SceneEstimatorNode::~SceneEstimatorNode() {
+  diagnostics_timer_.stop();  // its callbacks read the autosaver, reset below
   subscriber_.reset();
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);
