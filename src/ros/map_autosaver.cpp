@@ -80,7 +80,6 @@ void MapAutosaver::run() {
     if (ok) {
       ++status_.saved;
       status_.last_error.clear();
-      status_.last_file = files.yaml;
       status_.last_keyframes = keyframes;
       status_.last_saved_s = offered_s;
     } else {

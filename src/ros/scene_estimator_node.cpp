@@ -154,7 +154,7 @@ void SceneEstimatorNode::startAutosave() {
   c.every_keyframes = config_.node.autosave_every_keyframes;
   c.every_s = config_.node.autosave_every_s;
   c.prefix = config_.node.autosave_prefix;
-  if (c.every_keyframes <= 0 && c.every_s <= 0.0) {
+  if (!c.enabled()) {
     ROS_INFO("geofusion: autosave off (node.autosave_every_keyframes and _every_s are 0)");
     return;
   }
@@ -722,13 +722,18 @@ void SceneEstimatorNode::autosaveIfDue() {
   }
   const double now_s = ros::WallTime::now().toSec();
   if (!autosaver_->keyframeAdded(now_s)) return;
-  RunResults map = pipeline_->currentMap(false);
+  autosaver_->offer(mapToSave(false, "scene_estimator_node autosave"), now_s);
+}
+
+// The map as ~save_map and the autosave write it: what the run was, who saved it. mutex_ held.
+RunResults SceneEstimatorNode::mapToSave(bool final_solve, const char* source) {
+  RunResults map = pipeline_->currentMap(final_solve);
   map.method = method_name_;
-  map.source = "scene_estimator_node autosave";
+  map.source = source;
   map.model_set = config_.model_set.name;
   map.config_yaml = configYaml(config_);
   map.session = launch_id_;
-  autosaver_->offer(std::move(map), now_s);
+  return map;
 }
 
 void SceneEstimatorNode::diagnoseAutosave(diagnostic_updater::DiagnosticStatusWrapper& status) {
@@ -776,12 +781,7 @@ bool SceneEstimatorNode::save(const std::string& prefix, std::string* message,
                               std::vector<std::string>* files) {
   std::lock_guard<std::mutex> lock(mutex_);
   takeOverflows();
-  RunResults map = pipeline_->currentMap();
-  map.method = method_name_;
-  map.source = "scene_estimator_node";
-  map.model_set = config_.model_set.name;
-  map.config_yaml = configYaml(config_);
-  map.session = launch_id_;
+  RunResults map = mapToSave(true, "scene_estimator_node");
   const std::size_t objects = map.final_map.objects.size(),
                     contacts = map.final_map.contacts.size();
   MapFiles written;

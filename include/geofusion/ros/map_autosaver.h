@@ -32,6 +32,7 @@ class MapAutosaver {
     int every_keyframes = 10;  ///< a save after this many keyframes (0: not by count)
     double every_s = 60.0;     ///< ... or this long after the last (0: not by time)
     std::string prefix;        ///< where (map_store's prefix)
+    bool enabled() const { return every_keyframes > 0 || every_s > 0.0; }
   };
   /// How a snapshot is saved (the pipeline's saveMap: the background too).
   using Save = std::function<bool(const std::string& prefix, RunResults map, MapFiles* files,
@@ -39,7 +40,6 @@ class MapAutosaver {
   struct Status {
     std::size_t saved = 0, failed = 0;  ///< saves done and failed since the start
     std::string last_error;             ///< of the last save, empty when it succeeded
-    std::string last_file;              ///< the YAML of the last successful save
     int last_keyframes = 0;             ///< keyframes_total of the last successful save
     double last_saved_s = -1.0;         ///< when (the clock given to keyframeAdded), -1: never
     bool pending = false;               ///< a snapshot waits for the writer
@@ -51,7 +51,7 @@ class MapAutosaver {
   MapAutosaver(const MapAutosaver&) = delete;
   MapAutosaver& operator=(const MapAutosaver&) = delete;
 
-  bool enabled() const { return config_.every_keyframes > 0 || config_.every_s > 0.0; }
+  bool enabled() const { return config_.enabled(); }
   const Config& config() const { return config_; }
   /// A keyframe was added at `now_s`: true when a save is due (the count reached, or the time
   /// since the last save passed); the caller then offers a snapshot.

@@ -83,6 +83,7 @@ class SceneEstimatorNode {
   void diagnoseAutosave(diagnostic_updater::DiagnosticStatusWrapper& status);
   bool resumeAutosave();  // loads this launch's autosave; false when there is none to resume
   void autosaveIfDue();   // after a keyframe, mutex_ held
+  RunResults mapToSave(bool final_solve, const char* source);  // mutex_ held
   bool save(const std::string& prefix, std::string* message, std::vector<std::string>* files);
   bool load(const std::string& path, std::string* message, int* objects);
   bool onLoad(geofusion::LoadMap::Request& req, geofusion::LoadMap::Response& res);
