@@ -13,8 +13,8 @@
 #   make fuzz [FUZZ_RUNS=N]      libFuzzer (clang 14) on the input parsers, 1000000 runs per target
 #   make screenshots             the rviz screenshots of README and docs/running.md (docs/images) by the rviz_screenshots test
 #   make soak [SOAK_KEYFRAMES=N] a long run (tables revisited): time and memory per keyframe, plots
-#   make test-platforms [RELEASES="bullseye trixie"]  build + every test in Debian 11 / 13 chroots
-#                                (catkin_make in a fresh workspace; root; docs/tests.md)
+#   make test-platforms [RELEASES="bullseye focal trixie"]  build + every test in Debian 11 / 13 chroots
+#                                (focal: Ubuntu 20.04's pybind11, no meshoptimizer; catkin_make and catkin build; root; docs/tests.md)
 .PHONY: demo test test-asan test-tsan fuzz data bench bench-real live-bench vo-bench screenshots soak test-platforms deps build lint clean help
 
 help:
@@ -63,7 +63,7 @@ soak: build
 screenshots: build
 	@bash -c 'source scripts/env.sh && set +u && source "$$GEOFUSION_WS/devel/setup.bash" && GEOFUSION_SCREENSHOT_DIR=$(CURDIR)/docs/images /usr/bin/python3 test/ros/rviz_screenshots.py'
 
-RELEASES ?= bullseye trixie
+RELEASES ?= bullseye focal trixie
 test-platforms:
 	@bash scripts/test_platforms.sh $(RELEASES)
 
