@@ -13,16 +13,18 @@ import shutil
 import sys
 import tempfile
 
-RUNTIME = ["common", "model", "render", "estimation", "odometry", "background", "config"]
+RUNTIME = ["common", "model", "physics", "render", "estimation", "odometry", "background", "config"]
 # module -> modules its files may include (itself included).
 ALLOWED = {
     "common": {"common"},
     "model": {"common", "model"},
+    "physics": {"common", "model", "physics"},
     "render": {"common", "model", "render"},
     "estimation": {"common", "model", "render", "estimation"},
     "odometry": {"common", "odometry"},
     "background": {"common", "model", "render", "background"},
-    "config": {"common", "model", "render", "estimation", "odometry", "background", "config"},
+    "config": {"common", "model", "physics", "render", "estimation", "odometry", "background",
+               "config"},
     "simulation": set(RUNTIME) | {"simulation"},
     "evaluation": set(RUNTIME) | {"simulation", "evaluation"},
     "ros": set(RUNTIME) | {"ros"},

@@ -4,11 +4,13 @@
 #include "geofusion/evaluation/vsd.h"
 
 #include "geofusion/common/atomic_file.h"
+#include "geofusion/config/config.h"
 #include "geofusion/estimation/relations.h"
 #include "geofusion/evaluation/bop_metrics.h"
 #include "geofusion/evaluation/evaluation.h"
 #include "geofusion/evaluation/keyframe_matcher.h"
 #include "geofusion/evaluation/metrics.h"
+#include "geofusion/physics/stability.h"
 #include "geofusion/render/renderer.h"
 #include "geofusion/simulation/clutter_scene.h"
 
@@ -506,6 +508,60 @@ void evaluatePlausibility(const GroundTruth& gt, const RunResults& results, cons
   }
 }
 
+// The stability settings of the run: its configuration's `physics` section (the defaults when
+// the results carry none or it does not load; a warning says so).
+physics::StabilityConfig stabilitySettings(const RunResults& results, RunEvaluation* ev) {
+  GeoFusionConfig config;
+  if (results.config_yaml.empty()) return config.physics;
+  ConfigReport report;
+  if (!loadConfigText(results.config_yaml, "the results' configuration", &config, &report)) {
+    ev->warnings.push_back("stability: the results' configuration does not load (" +
+                           (report.errors.empty() ? std::string("?") : report.errors.front()) +
+                           "); the default physics settings are used");
+    return GeoFusionConfig().physics;
+  }
+  return config.physics;
+}
+
+// "class #id (true)" for a body of the map's stability check, "table" for the plane.
+std::string describeBody(const std::vector<ObjectEstimate>& map, const MapScore& score, int id) {
+  if (id == physics::kPlaneId) return "table";
+  for (std::size_t i = 0; i < map.size(); ++i)
+    if (map[i].id == id) return describeMapObject(map, score, i);
+  return "#" + std::to_string(id);
+}
+
+// Physical stability (issue 50): the final map on its support plane under gravity, and the true
+// scene on the true table as the reference; the share of the true objects that stay put.
+void evaluateStability(const GroundTruth& gt, const RunResults& results, const MapScore& score,
+                       RunEvaluation* ev) {
+  const std::vector<ObjectEstimate>& map = results.final_map.objects;
+  ev->stability_config = stabilitySettings(results, ev);
+  std::vector<physics::StabilityBody> bodies;
+  for (const ObjectEstimate& o : map) bodies.push_back({o.id, o.model, o.T_map_obj});
+  const Plane table = tableOf(gt, results, *ev);
+  const physics::StabilityPlane plane{table.n, table.h};
+  ev->stability = physics::checkStability(bodies, &plane, -table.n, ev->stability_config);
+  for (std::size_t i = 0; i < map.size(); ++i) {
+    if (i >= score.match.size() || score.match[i] < 0) continue;
+    const physics::BodyMotion* m = ev->stability.find(map[i].id);
+    ++ev->stability_true_objects;
+    ev->stability_true_stable += m && m->stable;
+    ev->stability_true_interpenetrating += m && m->interpenetrating;
+  }
+  const auto& [a, b] = ev->stability.least_stable_pair;
+  if (a != -1) ev->least_stable_pair = describeBody(map, score, a) + " / " + describeBody(map, score, b);
+  for (const std::string& w : ev->stability.warnings) ev->warnings.push_back("stability: " + w);
+
+  std::vector<physics::StabilityBody> truth;
+  for (std::size_t i = 0; i < gt.scene.objects.size(); ++i)
+    truth.push_back({int(i), gt.scene.objects[i].model, gt.scene.objects[i].T_world_obj});
+  const physics::StabilityPlane true_table{Eigen::Vector3d::UnitZ(), gt.scene.table.height_m};
+  ev->stability_truth = physics::checkStability(truth, &true_table, -Eigen::Vector3d::UnitZ(),
+                                                ev->stability_config);
+  ev->has_stability = true;
+}
+
 // Which true objects are in keyframe `k`'s map: an estimate of the class within the match
 // distance, in the truth's frame (the final trajectory alignment).
 std::vector<bool> mappedObjects(const GroundTruth& gt, const KeyframeResult& k,
@@ -633,12 +689,63 @@ bool evaluateRun(const GroundTruth& gt, const RunResults& results, const Evaluat
   evaluateContactGraph(gt, results, score, &ev);
   evaluateDetectorErrors(gt, results.final_map.objects, score, config, &ev);
   evaluatePlausibility(gt, results, score, config, &ev);
+  evaluateStability(gt, results, score, &ev);
   evaluateLifecycle(gt, results, frames, score, config, &ev);
   *evaluation = std::move(ev);
   return true;
 }
 
 namespace {
+
+// One stability check as JSON: the counts, the bounds and every body's motion.
+nlohmann::json stabilityResultJson(const physics::StabilityResult& r) {
+  nlohmann::json bodies = nlohmann::json::array();
+  for (const physics::BodyMotion& m : r.bodies)
+    bodies.push_back({{"id", m.id},
+                      {"simulated", m.simulated},
+                      {"problem", m.problem},
+                      {"translation_mm", 1000 * m.translation_m},
+                      {"rotation_deg", m.rotation_deg},
+                      {"start_penetration_mm", 1000 * m.start_penetration_m},
+                      {"penetrating_id", m.penetrating_id},
+                      {"interpenetrating", m.interpenetrating},
+                      {"stable", m.stable}});
+  return {{"has_plane", r.has_plane},
+          {"simulated", r.simulated},
+          {"interpenetrating", r.interpenetrating},
+          {"checked", r.checked},
+          {"stable", r.stable},
+          {"mean_translation_mm", 1000 * r.mean_translation_m},
+          {"max_translation_mm", 1000 * r.max_translation_m},
+          {"max_rotation_deg", r.max_rotation_deg},
+          {"least_stable_pair", {r.least_stable_pair.first, r.least_stable_pair.second}},
+          {"least_stable_pair_mm", 1000 * r.least_stable_pair_m},
+          {"bodies", bodies}};
+}
+
+// The stability block: the settings, the map's check, its true objects, the truth's check.
+nlohmann::json stabilityJson(const RunEvaluation& e) {
+  const physics::StabilityConfig& c = e.stability_config;
+  return {{"settings",
+           {{"duration_s", c.duration_s},
+            {"time_step_s", c.time_step_s},
+            {"density_kg_m3", c.density_kg_m3},
+            {"friction", c.friction},
+            {"rolling_friction", c.rolling_friction},
+            {"linear_damping", c.linear_damping},
+            {"angular_damping", c.angular_damping},
+            {"gravity_m_s2", c.gravity_m_s2},
+            {"stable_translation_m", c.stable_translation_m},
+            {"stable_rotation_deg", c.stable_rotation_deg},
+            {"start_penetration_m", c.start_penetration_m},
+            {"contact_distance_m", c.contact_distance_m}}},
+          {"true_objects", e.stability_true_objects},
+          {"true_stable", e.stability_true_stable},
+          {"true_interpenetrating", e.stability_true_interpenetrating},
+          {"least_stable_pair", e.least_stable_pair},
+          {"map", stabilityResultJson(e.stability)},
+          {"ground_truth", stabilityResultJson(e.stability_truth)}};
+}
 
 // A YAML tree as JSON: maps and lists as they are, scalars as booleans, numbers or strings.
 nlohmann::json jsonOf(const YAML::Node& n) {
@@ -880,6 +987,7 @@ bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::s
                     {"gap_mm", scaled(e.gap_m, 1000.0)},
                     {"deepest_pair", e.deepest_pair},
                     {"widest_gap_pair", e.widest_gap_pair}};
+  if (e.has_stability) j["stability"] = stabilityJson(e);
   j["lifecycle"] = lifecycleJson(e);
   j["trajectory"] = {{"ate_rmse_m", e.alignment_rmse_m},
                      {"odometry_ate_rmse_m", e.odometry_ate_rmse_m}};
@@ -952,6 +1060,21 @@ std::string summarize(const RunEvaluation& e) {
     s << "    deepest: " << e.deepest_pair << "\n";
   if (!e.widest_gap_pair.empty() && maxOf(e.gap_m) > 0.0)
     s << "    widest gap: " << e.widest_gap_pair << "\n";
+  if (e.has_stability) {
+    const physics::StabilityResult& m = e.stability;
+    std::snprintf(line, sizeof(line),
+                  "  stability (%.1f s of gravity): %d of %d true objects stable (%d start "
+                  "interpenetrating); checked objects move %.1f mm mean, %.1f mm / %.1f deg max; "
+                  "ground truth %d of %zu stable\n",
+                  e.stability_config.duration_s, e.stability_true_stable, e.stability_true_objects,
+                  e.stability_true_interpenetrating, 1000 * m.mean_translation_m,
+                  1000 * m.max_translation_m, m.max_rotation_deg, e.stability_truth.stable,
+                  e.stability_truth.bodies.size());
+    s << line;
+    if (!e.least_stable_pair.empty())
+      s << "    least stable pair: " << e.least_stable_pair << " ("
+        << std::lround(10000 * m.least_stable_pair_m) / 10.0 << " mm apart after it)\n";
+  }
   // The mean carries the solves made only every N-th keyframe (B-SLAM's stage I), which the
   // median does not see.
   std::snprintf(line, sizeof(line),

@@ -497,6 +497,38 @@ def physics_metrics(evals):
             'physics_pairs': int(pen.size)}
 
 
+def stability_metrics(evals):
+    """Physical stability (Bullet, evaluation's 'stability'): the share of the final maps' true
+    objects that stay put, the checked objects' motion, the least stable pair, and the ground
+    truth's share on the same settings (the reference row). None where no file has it."""
+    blocks = [(ev.get('scene'), ev['stability']) for ev in evals if ev.get('stability')]
+    if not blocks:
+        return {'stability_true_share': None, 'stability_truth_share': None}
+    true_n = sum(b['true_objects'] for _, b in blocks)
+    stable = sum(b['true_stable'] for _, b in blocks)
+    moves = [body['translation_mm'] for _, b in blocks for body in b['map']['bodies']
+             if body['simulated'] and not body['interpenetrating']]
+    turns = [body['rotation_deg'] for _, b in blocks for body in b['map']['bodies']
+             if body['simulated'] and not body['interpenetrating']]
+    truth_n = sum(len(b['ground_truth']['bodies']) for _, b in blocks)
+    truth_stable = sum(b['ground_truth']['stable'] for _, b in blocks)
+    worst = max(blocks, key=lambda sb: sb[1]['map']['least_stable_pair_mm'])
+    return {'stability_true_objects': true_n,
+            'stability_true_stable': stable,
+            'stability_true_share': _ratio(stable, true_n),
+            'stability_true_interpenetrating': sum(b['true_interpenetrating'] for _, b in blocks),
+            'stability_mean_translation_mm': float(np.mean(moves)) if moves else 0.0,
+            'stability_max_translation_mm': float(np.max(moves)) if moves else 0.0,
+            'stability_max_rotation_deg': float(np.max(turns)) if turns else 0.0,
+            'stability_least_stable_pair': ('%s: %s (%.1f mm)' % (
+                worst[0], worst[1]['least_stable_pair'], worst[1]['map']['least_stable_pair_mm'])
+                if worst[1]['least_stable_pair'] else None),
+            'stability_truth_objects': truth_n,
+            'stability_truth_stable': truth_stable,
+            'stability_truth_share': _ratio(truth_stable, truth_n),
+            'stability_settings': blocks[0][1]['settings']}
+
+
 def _percentile(values, q):
     return float(np.percentile(values, q)) if len(values) else None
 
@@ -612,6 +644,7 @@ def method_summary(evals):
     out['class_recall'] = class_recall(evals)
     out.update(contact_metrics(evals))
     out.update(physics_metrics(evals))
+    out.update(stability_metrics(evals))
     out.update(timing_metrics(evals))
     out.update(final_map_figures(evals))
     out.update(lifecycle_figures(evals))
@@ -719,7 +752,28 @@ def check_targets(methods, suite=None):
         _persistent_suite_targets(methods, add, suite)
     else:
         _paper_suite_targets(methods, add)
+    _stability_targets(methods, add, suite)
     return rows
+
+
+def _stability_targets(methods, add, suite=None):
+    """Issue 50: the ground truth at least 99 % stable on every suite; GeoFusion at least 95 % on
+    bench, bench_rgb and the real frames, ahead of every other method."""
+    ours = methods.get(OURS) or {}
+    truth = next((m.get('stability_truth_share') for m in methods.values()
+                  if m.get('stability_truth_share') is not None), None)
+    if truth is None:
+        return  # evaluations from before the stability check
+    add('stability: ground truth >= 0.99 stable', '%.3f' % truth, truth >= 0.99,
+        '%.3f' % (0.99 - truth))
+    value, best, best_name = _ahead(methods, 'stability_true_share')
+    if suite in PERSISTENT_SUITES + ('real',):
+        add('stability: %s >= 0.95 of its true objects stable' % OURS,
+            'n/a' if value is None else '%.3f' % value, value is not None and value >= 0.95,
+            'n/a' if value is None else '%.3f' % (0.95 - value))
+    if value is not None and best is not None:
+        add('stability: %s ahead of every other method' % OURS,
+            '%.3f vs %.3f (%s)' % (value, best, best_name), value > best, '%.3f' % (best - value))
 
 
 # Issue 20: contact F1 per kind on the persistent-error suites.
@@ -1019,6 +1073,31 @@ def _table(header, rows, numeric=True):
     return lines
 
 
+def stability_section(methods):
+    """The stability table: every method's final map under gravity, the ground truth below."""
+    have = [(n, m) for n, m in methods.items() if m.get('stability_true_share') is not None]
+    if not have:
+        return []
+    c = have[0][1]['stability_settings']
+    md = ['## Stability (Bullet, %.1f s of gravity)' % c['duration_s'], '',
+          'Each final map on its support plane as the objects\' convex parts (density %g kg/m^3, '
+          'friction %g); stable: moves under %g mm and %g deg. Objects that start more than %g mm '
+          'into another or the table are counted apart (not stable).' % (
+              c['density_kg_m3'], c['friction'], 1000 * c['stable_translation_m'],
+              c['stable_rotation_deg'], 1000 * c['start_penetration_m']), '']
+    rows = [[n, '%d / %d' % (m['stability_true_stable'], m['stability_true_objects']),
+             _num(m['stability_true_share'], 3), str(m['stability_true_interpenetrating']),
+             _num(m['stability_mean_translation_mm'], 1), _num(m['stability_max_translation_mm'], 1),
+             _num(m['stability_max_rotation_deg'], 1), m['stability_least_stable_pair'] or '-']
+            for n, m in have]
+    t = have[0][1]
+    rows.append(['ground truth', '%d / %d' % (t['stability_truth_stable'], t['stability_truth_objects']),
+                 _num(t['stability_truth_share'], 3), '-', '-', '-', '-', '-'])
+    return _table(['method', 'true objects stable', 'share', 'start interpenetrating',
+                   'motion mean (mm)', 'motion max (mm)', 'turn max (deg)', 'least stable pair'],
+                  rows) + ['']
+
+
 def write_report(summary, out_dir, figures, command):
     """report.md from the summary."""
     methods, scenes = summary['methods'], summary['scenes']
@@ -1130,6 +1209,7 @@ def write_report(summary, out_dir, figures, command):
              str(m['physics_pairs'])] for n, m in methods.items()]
     md += _table(['method', 'penetration mean (mm)', 'penetration max (mm)', 'gap mean (mm)',
                   'gap max (mm)', 'values'], rows) + ['']
+    md += stability_section(methods)
     rows = [[n, '%d / %d / %d' % (m['final_objects'], m['final_matched'],
                                   m['final_true_objects']),
              _num(None if m['final_adds_mean_m'] is None else 1000 * m['final_adds_mean_m']),

@@ -14,6 +14,7 @@
 #include "geofusion/estimation/scene_estimator.h"
 #include "geofusion/model/surface_features.h"
 #include "geofusion/odometry/visual_odometry.h"
+#include "geofusion/physics/stability.h"
 
 #include <functional>
 #include <limits>
@@ -87,6 +88,8 @@ struct GeoFusionConfig {
   KeyframeSelectorConfig keyframes;
   EstimatorConfig estimator;
   bool background_enabled = true;
+  /// The stability check (evaluation and the results' summary).
+  physics::StabilityConfig physics;
   BackgroundMapConfig background;
   VisualOdometryConfig visual_odometry;
   NodeConfig node;

@@ -10,6 +10,7 @@
 #include "geofusion/common/camera.h"
 #include "geofusion/common/image_box.h"
 #include "geofusion/estimation/run_results.h"
+#include "geofusion/physics/stability.h"
 #include "geofusion/simulation/dataset.h"
 
 #include <Eigen/Geometry>
@@ -168,6 +169,15 @@ struct RunEvaluation {
   /// The pairs behind the maxima: "class #id (true|false) / class #id (...)" ("table" for the
   /// table), for finding what makes a map implausible; empty when there is none.
   std::string deepest_pair, widest_gap_pair;
+  /// Physical stability (physics/stability.h): the final map on its support plane under gravity
+  /// and, as the reference, the true scene on the true table, with the run's `physics` settings.
+  bool has_stability = false;
+  physics::StabilityConfig stability_config;
+  physics::StabilityResult stability, stability_truth;
+  /// Of the map's true (matched) objects: how many, how many stable, how many start
+  /// interpenetrating (reported apart, not stable).
+  int stability_true_objects = 0, stability_true_stable = 0, stability_true_interpenetrating = 0;
+  std::string least_stable_pair;  ///< as deepest_pair, "table" for the plane
   std::vector<GraphObject> graph_true_objects, graph_estimated_objects;
   std::vector<GraphContact> graph_true_contacts, graph_estimated_contacts;
 

@@ -1,0 +1,365 @@
+#include "geofusion/physics/stability.h"
+
+#include <btBulletDynamicsCommon.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "geofusion/model/collision.h"
+#include "geofusion/model/object_model.h"
+
+namespace geofusion {
+namespace physics {
+namespace {
+
+btVector3 bt(const Eigen::Vector3d& v) { return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z())); }
+Eigen::Vector3d eig(const btVector3& v) { return Eigen::Vector3d(v.x(), v.y(), v.z()); }
+
+btTransform toBullet(const Eigen::Isometry3d& T) {
+  const Eigen::Quaterniond q(T.linear());
+  return btTransform(btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w())),
+                     bt(T.translation()));
+}
+
+Eigen::Isometry3d fromBullet(const btTransform& t) {
+  const btQuaternion q = t.getRotation();
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z()).normalized().toRotationMatrix();
+  T.translation() = eig(t.getOrigin());
+  return T;
+}
+
+/// The convex pieces a body is made of: the model's convex parts, else its collision hull.
+std::vector<TriangleMesh> collisionShapes(const ObjectModel& model) {
+  std::vector<TriangleMesh> shapes;
+  for (const TriangleMesh& part : model.collision_parts)
+    if (!part.empty()) shapes.push_back(part);
+  if (shapes.empty()) {
+    TriangleMesh hull = collisionHullOf(model);
+    if (!hull.empty()) shapes.push_back(std::move(hull));
+  }
+  return shapes;
+}
+
+/// Lowest point of the shapes along `up` in the world (for the plane's penetration and a floor).
+double lowestAlong(const std::vector<TriangleMesh>& shapes, const Eigen::Isometry3d& T,
+                   const Eigen::Vector3d& up) {
+  double lowest = std::numeric_limits<double>::infinity();
+  for (const TriangleMesh& s : shapes)
+    for (const Eigen::Vector3f& v : s.vertices) lowest = std::min(lowest, up.dot(T * v.cast<double>()));
+  return lowest;
+}
+
+/// One dynamic body: a compound of convex hulls about its centre of mass and principal axes.
+struct Body {
+  std::vector<std::unique_ptr<btConvexHullShape>> hulls;
+  std::unique_ptr<btCompoundShape> compound;
+  std::unique_ptr<btDefaultMotionState> state;
+  std::unique_ptr<btRigidBody> rigid;
+  Eigen::Isometry3d T_obj_body = Eigen::Isometry3d::Identity();  ///< body frame in the model frame
+};
+
+Body makeBody(const std::vector<TriangleMesh>& shapes, const Eigen::Isometry3d& T_world_obj,
+              const StabilityConfig& config) {
+  Body b;
+  btCompoundShape in_model_frame(false);
+  std::vector<btScalar> masses;
+  for (const TriangleMesh& s : shapes) {
+    auto hull = std::make_unique<btConvexHullShape>();
+    for (const Eigen::Vector3f& v : s.vertices) hull->addPoint(btVector3(v.x(), v.y(), v.z()), false);
+    hull->recalcLocalAabb();
+    hull->setMargin(btScalar(0.0005));
+    btTransform identity;
+    identity.setIdentity();
+    in_model_frame.addChildShape(identity, hull.get());
+    masses.push_back(btScalar(config.density_kg_m3 * std::max(enclosedVolume(s), 1e-9)));
+    b.hulls.push_back(std::move(hull));
+  }
+  btTransform principal;
+  btVector3 inertia;
+  in_model_frame.calculatePrincipalAxisTransform(masses.data(), principal, inertia);
+  b.T_obj_body = fromBullet(principal);
+  b.compound = std::make_unique<btCompoundShape>(false);
+  const btTransform body_from_model = principal.inverse();
+  for (int i = 0; i < in_model_frame.getNumChildShapes(); ++i)
+    b.compound->addChildShape(body_from_model * in_model_frame.getChildTransform(i),
+                              in_model_frame.getChildShape(i));
+  btScalar mass = 0;
+  for (btScalar m : masses) mass += m;
+  b.state = std::make_unique<btDefaultMotionState>(toBullet(T_world_obj * b.T_obj_body));
+  btRigidBody::btRigidBodyConstructionInfo info(mass, b.state.get(), b.compound.get(), inertia);
+  info.m_friction = btScalar(config.friction);
+  info.m_rollingFriction = btScalar(config.rolling_friction);
+  info.m_spinningFriction = btScalar(config.rolling_friction);
+  info.m_restitution = 0;
+  info.m_linearDamping = btScalar(config.linear_damping);
+  info.m_angularDamping = btScalar(config.angular_damping);
+  b.rigid = std::make_unique<btRigidBody>(info);
+  b.rigid->setActivationState(DISABLE_DEACTIVATION);
+  return b;
+}
+
+/// The Bullet world: a static slab whose top face is the plane, and the bodies.
+class World {
+ public:
+  World(const StabilityPlane& plane, const Eigen::Vector3d& centre, double half_extent_m,
+        const Eigen::Vector3d& gravity, const StabilityConfig& config)
+      : dispatcher_(&collision_config_),
+        world_(&dispatcher_, &broadphase_, &solver_, &collision_config_) {
+    world_.setGravity(bt(gravity));
+    const double thickness = 0.1;
+    slab_shape_ = std::make_unique<btBoxShape>(
+        btVector3(btScalar(half_extent_m), btScalar(half_extent_m), btScalar(0.5 * thickness)));
+    slab_shape_->setMargin(btScalar(0.0005));
+    const Eigen::Vector3d n = plane.normal.normalized();
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), n).toRotationMatrix();
+    // The slab's top face through the plane, under the bodies' centre.
+    T.translation() = centre - (n.dot(centre) - plane.offset) * n - 0.5 * thickness * n;
+    slab_state_ = std::make_unique<btDefaultMotionState>(toBullet(T));
+    btRigidBody::btRigidBodyConstructionInfo info(0, slab_state_.get(), slab_shape_.get());
+    info.m_friction = btScalar(config.friction);
+    info.m_rollingFriction = btScalar(config.rolling_friction);
+    slab_ = std::make_unique<btRigidBody>(info);
+    world_.addRigidBody(slab_.get());
+  }
+  ~World() {
+    for (Body& b : bodies_) world_.removeRigidBody(b.rigid.get());
+    world_.removeRigidBody(slab_.get());
+  }
+  std::size_t add(Body body) {
+    world_.addRigidBody(body.rigid.get());
+    bodies_.push_back(std::move(body));
+    return bodies_.size() - 1;
+  }
+  void step(double duration_s, double dt) {
+    const int steps = static_cast<int>(std::ceil(duration_s / dt - 1e-9));
+    for (int i = 0; i < steps; ++i) world_.stepSimulation(btScalar(dt), 1, btScalar(dt));
+  }
+  Eigen::Isometry3d pose(std::size_t i) const {
+    btTransform t;
+    bodies_[i].state->getWorldTransform(t);
+    return fromBullet(t) * bodies_[i].T_obj_body.inverse();
+  }
+  Eigen::Vector3d centreOfMass(std::size_t i) const {
+    btTransform t;
+    bodies_[i].state->getWorldTransform(t);
+    return eig(t.getOrigin());
+  }
+
+ private:
+  btDefaultCollisionConfiguration collision_config_;
+  btCollisionDispatcher dispatcher_;
+  btDbvtBroadphase broadphase_;
+  btSequentialImpulseConstraintSolver solver_;
+  btDiscreteDynamicsWorld world_;
+  std::unique_ptr<btBoxShape> slab_shape_;
+  std::unique_ptr<btDefaultMotionState> slab_state_;
+  std::unique_ptr<btRigidBody> slab_;
+  std::vector<Body> bodies_;
+};
+
+struct Prepared {
+  std::size_t index = 0;  ///< into the bodies given
+  std::vector<TriangleMesh> shapes;
+  Eigen::AlignedBox3d box;  ///< world bounds of the shapes
+};
+
+Eigen::AlignedBox3d worldBox(const std::vector<TriangleMesh>& shapes, const Eigen::Isometry3d& T) {
+  Eigen::AlignedBox3d box;
+  for (const TriangleMesh& s : shapes)
+    for (const Eigen::Vector3f& v : s.vertices) box.extend(T * v.cast<double>());
+  return box;
+}
+
+/// Start state: each simulated body's deepest penetration (another body or the plane) and the
+/// pairs in contact.
+std::vector<std::pair<int, int>> startContacts(const std::vector<StabilityBody>& bodies,
+                                               const std::vector<Prepared>& prepared,
+                                               const StabilityPlane& plane,
+                                               const StabilityConfig& config,
+                                               std::vector<BodyMotion>* motions) {
+  std::vector<std::pair<int, int>> pairs;  // indices into `prepared`, -1 for the plane
+  HullCollider collider;
+  const Eigen::Vector3d n = plane.normal.normalized();
+  auto deepen = [&](BodyMotion& m, double depth, int other_id) {
+    if (depth > m.start_penetration_m) {
+      m.start_penetration_m = depth;
+      m.penetrating_id = other_id;
+    }
+  };
+  for (std::size_t a = 0; a < prepared.size(); ++a) {
+    const StabilityBody& A = bodies[prepared[a].index];
+    const double above = lowestAlong(prepared[a].shapes, A.T_world_obj, n) - plane.offset;
+    deepen((*motions)[prepared[a].index], -above, kPlaneId);
+    if (above < config.contact_distance_m) pairs.emplace_back(int(a), -1);
+    for (std::size_t b = a + 1; b < prepared.size(); ++b) {
+      const Eigen::AlignedBox3d grown(prepared[b].box.min().array() - config.contact_distance_m,
+                                      prepared[b].box.max().array() + config.contact_distance_m);
+      if (!grown.intersects(prepared[a].box)) continue;
+      const StabilityBody& B = bodies[prepared[b].index];
+      const double depth = collider.partsPenetration(A.model, A.T_world_obj, B.model, B.T_world_obj);
+      if (depth > 0.0) {
+        deepen((*motions)[prepared[a].index], depth, B.id);
+        deepen((*motions)[prepared[b].index], depth, A.id);
+      }
+      if (depth > 0.0 ||
+          collider.distance(A.model, A.T_world_obj, B.model, B.T_world_obj) < config.contact_distance_m)
+        pairs.emplace_back(int(a), int(b));
+    }
+  }
+  return pairs;
+}
+
+double rotationDeg(const Eigen::Isometry3d& before, const Eigen::Isometry3d& after) {
+  const Eigen::AngleAxisd delta(before.linear().transpose() * after.linear());
+  return std::abs(delta.angle()) * 180.0 / M_PI;
+}
+
+/// The plane the bodies stand on: the one given, else a floor under the lowest body.
+StabilityPlane supportOrFloor(const StabilityPlane* plane, const std::vector<StabilityBody>& bodies,
+                              const std::vector<Prepared>& prepared, const Eigen::Vector3d& up,
+                              StabilityResult* result) {
+  result->has_plane = plane != nullptr;
+  if (plane) return *plane;
+  StabilityPlane floor;
+  floor.normal = up;
+  floor.offset = std::numeric_limits<double>::infinity();
+  for (const Prepared& p : prepared)
+    floor.offset = std::min(floor.offset, lowestAlong(p.shapes, bodies[p.index].T_world_obj, up));
+  if (!std::isfinite(floor.offset)) floor.offset = 0.0;
+  result->warnings.push_back("no support plane: a floor is put under the lowest object");
+  return floor;
+}
+
+/// Sums, bounds and the least stable pair over the checked bodies.
+void summarise(const std::vector<Prepared>& prepared, const std::vector<std::pair<int, int>>& pairs,
+               const std::vector<Eigen::Vector3d>& displacement, const StabilityConfig& config,
+               StabilityResult* r) {
+  double sum = 0.0;
+  for (BodyMotion& m : r->bodies) {
+    if (!m.simulated) continue;
+    ++r->simulated;
+    m.interpenetrating = m.start_penetration_m > config.start_penetration_m;
+    if (m.interpenetrating) {
+      ++r->interpenetrating;
+      continue;
+    }
+    ++r->checked;
+    m.stable = m.translation_m < config.stable_translation_m && m.rotation_deg < config.stable_rotation_deg;
+    r->stable += m.stable ? 1 : 0;
+    sum += m.translation_m;
+    r->max_translation_m = std::max(r->max_translation_m, m.translation_m);
+    r->max_rotation_deg = std::max(r->max_rotation_deg, m.rotation_deg);
+  }
+  r->mean_translation_m = r->checked > 0 ? sum / r->checked : 0.0;
+  for (const auto& [a, b] : pairs) {
+    const BodyMotion& A = r->bodies[prepared[a].index];
+    if (A.interpenetrating || (b >= 0 && r->bodies[prepared[b].index].interpenetrating)) continue;
+    const Eigen::Vector3d other = b >= 0 ? displacement[b] : Eigen::Vector3d::Zero();
+    const double relative = (displacement[a] - other).norm();
+    if (r->least_stable_pair.first == -1 || relative > r->least_stable_pair_m) {
+      r->least_stable_pair = {A.id, b >= 0 ? r->bodies[prepared[b].index].id : kPlaneId};
+      r->least_stable_pair_m = relative;
+    }
+  }
+}
+
+}  // namespace
+
+std::vector<std::string> validate(const StabilityConfig& c) {
+  std::vector<std::string> errors;
+  auto check = [&errors](bool ok, const char* name, double value, const char* range) {
+    if (ok) return;
+    std::ostringstream s;
+    s << "physics." << name << " = " << value << " is out of range (" << range << ")";
+    errors.push_back(s.str());
+  };
+  check(c.duration_s >= 1e-3 && c.duration_s <= 60.0, "duration_s", c.duration_s, "0.001 <= x <= 60");
+  check(c.time_step_s >= 1e-4 && c.time_step_s <= 0.02, "time_step_s", c.time_step_s, "0.0001 <= x <= 0.02");
+  check(c.density_kg_m3 >= 10.0 && c.density_kg_m3 <= 20000.0, "density_kg_m3", c.density_kg_m3,
+        "10 <= x <= 20000");
+  check(c.friction >= 0.0 && c.friction <= 2.0, "friction", c.friction, "0 <= x <= 2");
+  check(c.rolling_friction >= 0.0 && c.rolling_friction <= 0.1, "rolling_friction", c.rolling_friction,
+        "0 <= x <= 0.1");
+  check(c.linear_damping >= 0.0 && c.linear_damping <= 0.99, "linear_damping", c.linear_damping, "0 <= x <= 0.99");
+  check(c.angular_damping >= 0.0 && c.angular_damping <= 0.99, "angular_damping", c.angular_damping,
+        "0 <= x <= 0.99");
+  check(c.gravity_m_s2 >= 0.01 && c.gravity_m_s2 <= 50.0, "gravity_m_s2", c.gravity_m_s2, "0.01 <= x <= 50");
+  check(c.stable_translation_m >= 1e-6 && c.stable_translation_m <= 1.0, "stable_translation_m",
+        c.stable_translation_m, "1e-6 <= x <= 1");
+  check(c.stable_rotation_deg >= 1e-3 && c.stable_rotation_deg <= 180.0, "stable_rotation_deg",
+        c.stable_rotation_deg, "0.001 <= x <= 180");
+  check(c.start_penetration_m >= 0.0 && c.start_penetration_m <= 1.0, "start_penetration_m",
+        c.start_penetration_m, "0 <= x <= 1");
+  check(c.contact_distance_m >= 0.0 && c.contact_distance_m <= 1.0, "contact_distance_m",
+        c.contact_distance_m, "0 <= x <= 1");
+  return errors;
+}
+
+const BodyMotion* StabilityResult::find(int id) const {
+  for (const BodyMotion& m : bodies)
+    if (m.id == id) return &m;
+  return nullptr;
+}
+
+StabilityResult checkStability(const std::vector<StabilityBody>& bodies, const StabilityPlane* plane,
+                               const Eigen::Vector3d& gravity, const StabilityConfig& config) {
+  StabilityResult result;
+  result.warnings = validate(config);
+  const StabilityConfig defaults;
+  const StabilityConfig& c = result.warnings.empty() ? config : defaults;
+  if (!result.warnings.empty()) result.warnings.push_back("physics: the defaults are used instead");
+  Eigen::Vector3d g = gravity.allFinite() && gravity.norm() > 1e-9 ? gravity.normalized()
+                      : plane ? -plane->normal.normalized() : Eigen::Vector3d(0, 0, -1);
+  std::vector<Prepared> prepared;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    BodyMotion m;
+    m.id = bodies[i].id;
+    std::vector<TriangleMesh> shapes;
+    if (!bodies[i].model) m.problem = "no model";
+    else if (!bodies[i].T_world_obj.matrix().allFinite()) m.problem = "pose not finite";
+    else if ((shapes = collisionShapes(*bodies[i].model)).empty()) m.problem = "no collision shape";
+    if (!m.problem.empty()) {
+      result.warnings.push_back("object " + std::to_string(m.id) + " (" +
+                                (bodies[i].model ? bodies[i].model->name : std::string("?")) +
+                                "): " + m.problem + ", not simulated");
+    } else {
+      m.simulated = true;
+      Prepared p{i, std::move(shapes), {}};
+      p.box = worldBox(p.shapes, bodies[i].T_world_obj);
+      centre += p.box.center();
+      prepared.push_back(std::move(p));
+    }
+    result.bodies.push_back(m);
+  }
+  if (prepared.empty()) return result;
+  centre /= double(prepared.size());
+  const StabilityPlane support = supportOrFloor(plane, bodies, prepared, -g, &result);
+  const auto pairs = startContacts(bodies, prepared, support, c, &result.bodies);
+
+  double spread = 0.5;
+  for (const Prepared& p : prepared) spread = std::max(spread, (p.box.center() - centre).norm() + p.box.diagonal().norm());
+  World world(support, centre, spread + 0.5, g * c.gravity_m_s2, c);
+  std::vector<Eigen::Vector3d> com_before;
+  for (const Prepared& p : prepared) {
+    world.add(makeBody(p.shapes, bodies[p.index].T_world_obj, c));
+    com_before.push_back(world.centreOfMass(com_before.size()));
+  }
+  world.step(c.duration_s, c.time_step_s);
+  std::vector<Eigen::Vector3d> displacement;
+  for (std::size_t k = 0; k < prepared.size(); ++k) {
+    BodyMotion& m = result.bodies[prepared[k].index];
+    displacement.push_back(world.centreOfMass(k) - com_before[k]);
+    m.translation_m = displacement.back().norm();
+    m.rotation_deg = rotationDeg(bodies[prepared[k].index].T_world_obj, world.pose(k));
+  }
+  summarise(prepared, pairs, displacement, c, &result);
+  return result;
+}
+
+}  // namespace physics
+}  // namespace geofusion
