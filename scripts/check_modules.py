@@ -20,7 +20,7 @@ ALLOWED = {
     "model": {"common", "model"},
     "physics": {"common", "model", "physics"},
     "render": {"common", "model", "render"},
-    "estimation": {"common", "model", "render", "estimation"},
+    "estimation": {"common", "model", "physics", "render", "estimation"},
     "odometry": {"common", "odometry"},
     "background": {"common", "model", "render", "background"},
     "config": {"common", "model", "physics", "render", "estimation", "odometry", "background",

@@ -5,6 +5,7 @@
 
 #include "geofusion/common/atomic_file.h"
 #include "geofusion/config/config.h"
+#include "geofusion/estimation/map_stability.h"
 #include "geofusion/estimation/relations.h"
 #include "geofusion/evaluation/bop_metrics.h"
 #include "geofusion/evaluation/evaluation.h"
@@ -537,11 +538,12 @@ void evaluateStability(const GroundTruth& gt, const RunResults& results, const M
                        RunEvaluation* ev) {
   const std::vector<ObjectEstimate>& map = results.final_map.objects;
   ev->stability_config = stabilitySettings(results, ev);
-  std::vector<physics::StabilityBody> bodies;
-  for (const ObjectEstimate& o : map) bodies.push_back({o.id, o.model, o.T_map_obj});
   const Plane table = tableOf(gt, results, *ev);
-  const physics::StabilityPlane plane{table.n, table.h};
-  ev->stability = physics::checkStability(bodies, &plane, -table.n, ev->stability_config);
+  SupportPlane plane;
+  plane.valid = true;
+  plane.normal = table.n;
+  plane.height = table.h;
+  ev->stability = checkMapStability(map, &plane, -table.n, ev->stability_config);
   for (std::size_t i = 0; i < map.size(); ++i) {
     if (i >= score.match.size() || score.match[i] < 0) continue;
     const physics::BodyMotion* m = ev->stability.find(map[i].id);

@@ -1,7 +1,5 @@
 #include "geofusion/physics/stability.h"
 
-#include <btBulletDynamicsCommon.h>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -9,27 +7,11 @@
 
 #include "geofusion/model/collision.h"
 #include "geofusion/model/object_model.h"
+#include "geofusion/physics/rigid_world.h"
 
 namespace geofusion {
 namespace physics {
 namespace {
-
-btVector3 bt(const Eigen::Vector3d& v) { return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z())); }
-Eigen::Vector3d eig(const btVector3& v) { return Eigen::Vector3d(v.x(), v.y(), v.z()); }
-
-btTransform toBullet(const Eigen::Isometry3d& T) {
-  const Eigen::Quaterniond q(T.linear());
-  return btTransform(btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w())),
-                     bt(T.translation()));
-}
-
-Eigen::Isometry3d fromBullet(const btTransform& t) {
-  const btQuaternion q = t.getRotation();
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z()).normalized().toRotationMatrix();
-  T.translation() = eig(t.getOrigin());
-  return T;
-}
 
 /// The convex pieces a body is made of: the model's convex parts, else its collision hull.
 std::vector<TriangleMesh> collisionShapes(const ObjectModel& model) {
@@ -52,114 +34,28 @@ double lowestAlong(const std::vector<TriangleMesh>& shapes, const Eigen::Isometr
   return lowest;
 }
 
-/// One dynamic body: a compound of convex hulls about its centre of mass and principal axes.
-struct Body {
-  std::vector<std::unique_ptr<btConvexHullShape>> hulls;
-  std::unique_ptr<btCompoundShape> compound;
-  std::unique_ptr<btDefaultMotionState> state;
-  std::unique_ptr<btRigidBody> rigid;
-  Eigen::Isometry3d T_obj_body = Eigen::Isometry3d::Identity();  ///< body frame in the model frame
-};
-
-Body makeBody(const std::vector<TriangleMesh>& shapes, const Eigen::Isometry3d& T_world_obj,
-              const StabilityConfig& config) {
-  Body b;
-  btCompoundShape in_model_frame(false);
-  std::vector<btScalar> masses;
-  for (const TriangleMesh& s : shapes) {
-    auto hull = std::make_unique<btConvexHullShape>();
-    for (const Eigen::Vector3f& v : s.vertices) hull->addPoint(btVector3(v.x(), v.y(), v.z()), false);
-    hull->recalcLocalAabb();
-    hull->setMargin(btScalar(0.0005));
-    btTransform identity;
-    identity.setIdentity();
-    in_model_frame.addChildShape(identity, hull.get());
-    masses.push_back(btScalar(config.density_kg_m3 * std::max(enclosedVolume(s), 1e-9)));
-    b.hulls.push_back(std::move(hull));
-  }
-  btTransform principal;
-  btVector3 inertia;
-  in_model_frame.calculatePrincipalAxisTransform(masses.data(), principal, inertia);
-  b.T_obj_body = fromBullet(principal);
-  b.compound = std::make_unique<btCompoundShape>(false);
-  const btTransform body_from_model = principal.inverse();
-  for (int i = 0; i < in_model_frame.getNumChildShapes(); ++i)
-    b.compound->addChildShape(body_from_model * in_model_frame.getChildTransform(i),
-                              in_model_frame.getChildShape(i));
-  btScalar mass = 0;
-  for (btScalar m : masses) mass += m;
-  b.state = std::make_unique<btDefaultMotionState>(toBullet(T_world_obj * b.T_obj_body));
-  btRigidBody::btRigidBodyConstructionInfo info(mass, b.state.get(), b.compound.get(), inertia);
-  info.m_friction = btScalar(config.friction);
-  info.m_rollingFriction = btScalar(config.rolling_friction);
-  info.m_spinningFriction = btScalar(config.rolling_friction);
-  info.m_restitution = 0;
-  info.m_linearDamping = btScalar(config.linear_damping);
-  info.m_angularDamping = btScalar(config.angular_damping);
-  b.rigid = std::make_unique<btRigidBody>(info);
-  b.rigid->setActivationState(DISABLE_DEACTIVATION);
-  return b;
+/// The slab whose top face is the plane, under the bodies' centre, 10 cm thick.
+void addSupportSlab(const StabilityPlane& plane, const Eigen::Vector3d& centre, double half_extent_m,
+                    const StabilityConfig& config, RigidWorld* world) {
+  const double thickness = 0.1;
+  const Eigen::Vector3d n = plane.normal.normalized();
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), n).toRotationMatrix();
+  T.translation() = centre - (n.dot(centre) - plane.offset) * n - 0.5 * thickness * n;
+  world->addStaticBox(T, Eigen::Vector3d(half_extent_m, half_extent_m, 0.5 * thickness),
+                      config.friction, config.rolling_friction);
 }
 
-/// The Bullet world: a static slab whose top face is the plane, and the bodies.
-class World {
- public:
-  World(const StabilityPlane& plane, const Eigen::Vector3d& centre, double half_extent_m,
-        const Eigen::Vector3d& gravity, const StabilityConfig& config)
-      : dispatcher_(&collision_config_),
-        world_(&dispatcher_, &broadphase_, &solver_, &collision_config_) {
-    world_.setGravity(bt(gravity));
-    const double thickness = 0.1;
-    slab_shape_ = std::make_unique<btBoxShape>(
-        btVector3(btScalar(half_extent_m), btScalar(half_extent_m), btScalar(0.5 * thickness)));
-    slab_shape_->setMargin(btScalar(0.0005));
-    const Eigen::Vector3d n = plane.normal.normalized();
-    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-    T.linear() = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), n).toRotationMatrix();
-    // The slab's top face through the plane, under the bodies' centre.
-    T.translation() = centre - (n.dot(centre) - plane.offset) * n - 0.5 * thickness * n;
-    slab_state_ = std::make_unique<btDefaultMotionState>(toBullet(T));
-    btRigidBody::btRigidBodyConstructionInfo info(0, slab_state_.get(), slab_shape_.get());
-    info.m_friction = btScalar(config.friction);
-    info.m_rollingFriction = btScalar(config.rolling_friction);
-    slab_ = std::make_unique<btRigidBody>(info);
-    world_.addRigidBody(slab_.get());
-  }
-  ~World() {
-    for (Body& b : bodies_) world_.removeRigidBody(b.rigid.get());
-    world_.removeRigidBody(slab_.get());
-  }
-  std::size_t add(Body body) {
-    world_.addRigidBody(body.rigid.get());
-    bodies_.push_back(std::move(body));
-    return bodies_.size() - 1;
-  }
-  void step(double duration_s, double dt) {
-    const int steps = static_cast<int>(std::ceil(duration_s / dt - 1e-9));
-    for (int i = 0; i < steps; ++i) world_.stepSimulation(btScalar(dt), 1, btScalar(dt));
-  }
-  Eigen::Isometry3d pose(std::size_t i) const {
-    btTransform t;
-    bodies_[i].state->getWorldTransform(t);
-    return fromBullet(t) * bodies_[i].T_obj_body.inverse();
-  }
-  Eigen::Vector3d centreOfMass(std::size_t i) const {
-    btTransform t;
-    bodies_[i].state->getWorldTransform(t);
-    return eig(t.getOrigin());
-  }
-
- private:
-  btDefaultCollisionConfiguration collision_config_;
-  btCollisionDispatcher dispatcher_;
-  btDbvtBroadphase broadphase_;
-  btSequentialImpulseConstraintSolver solver_;
-  btDiscreteDynamicsWorld world_;
-  std::unique_ptr<btBoxShape> slab_shape_;
-  std::unique_ptr<btDefaultMotionState> slab_state_;
-  std::unique_ptr<btRigidBody> slab_;
-  std::vector<Body> bodies_;
-};
+RigidBodyOptions bodyOptions(const StabilityConfig& c) {
+  RigidBodyOptions o;
+  o.mass_kg = 0.0;  // density x volume, a compound of the convex parts
+  o.density_kg_m3 = c.density_kg_m3;
+  o.friction = c.friction;
+  o.rolling_friction = c.rolling_friction;
+  o.linear_damping = c.linear_damping;
+  o.angular_damping = c.angular_damping;
+  return o;
+}
 
 struct Prepared {
   std::size_t index = 0;  ///< into the bodies given
@@ -343,13 +239,15 @@ StabilityResult checkStability(const std::vector<StabilityBody>& bodies, const S
 
   double spread = 0.5;
   for (const Prepared& p : prepared) spread = std::max(spread, (p.box.center() - centre).norm() + p.box.diagonal().norm());
-  World world(support, centre, spread + 0.5, g * c.gravity_m_s2, c);
+  RigidWorld world(g * c.gravity_m_s2);
+  addSupportSlab(support, centre, spread + 0.5, c, &world);
   std::vector<Eigen::Vector3d> com_before;
   for (const Prepared& p : prepared) {
-    world.add(makeBody(p.shapes, bodies[p.index].T_world_obj, c));
+    world.add(p.shapes, bodies[p.index].T_world_obj, bodyOptions(c));
     com_before.push_back(world.centreOfMass(com_before.size()));
   }
-  world.step(c.duration_s, c.time_step_s);
+  const int steps = static_cast<int>(std::ceil(c.duration_s / c.time_step_s - 1e-9));
+  for (int i = 0; i < steps; ++i) world.step(c.time_step_s);
   std::vector<Eigen::Vector3d> displacement;
   for (std::size_t k = 0; k < prepared.size(); ++k) {
     BodyMotion& m = result.bodies[prepared[k].index];

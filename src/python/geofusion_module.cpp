@@ -9,6 +9,7 @@
 #include "geofusion/config/config.h"
 #include "geofusion/estimation/bop_results.h"
 #include "geofusion/estimation/frame_by_frame.h"
+#include "geofusion/estimation/map_stability.h"
 #include "geofusion/estimation/scene_estimator.h"
 #include "geofusion/model/object_model.h"
 #include "geofusion/odometry/visual_odometry.h"
@@ -156,6 +157,32 @@ class PyEstimator {
     return bopResultsCsv(keyframeMapImages(record_), last_K_, ids);
   }
 
+  // The map so far under gravity on its support plane (physics/stability.h, the `physics`
+  // settings of the configuration).
+  py::dict stability() const {
+    const SupportPlane& plane = estimator_->supportPlane();
+    const physics::StabilityResult r =
+        checkMapStability(estimator_->objects(), &plane, config_.estimator.gravity, config_.physics);
+    py::list bodies;
+    for (const physics::BodyMotion& m : r.bodies)
+      bodies.append(py::dict(py::arg("id") = m.id, py::arg("simulated") = m.simulated,
+                             py::arg("problem") = m.problem, py::arg("translation_m") = m.translation_m,
+                             py::arg("rotation_deg") = m.rotation_deg,
+                             py::arg("start_penetration_m") = m.start_penetration_m,
+                             py::arg("penetrating_id") = m.penetrating_id,
+                             py::arg("interpenetrating") = m.interpenetrating,
+                             py::arg("stable") = m.stable));
+    return py::dict(py::arg("objects") = bodies, py::arg("has_plane") = r.has_plane,
+                    py::arg("simulated") = r.simulated, py::arg("interpenetrating") = r.interpenetrating,
+                    py::arg("checked") = r.checked, py::arg("stable") = r.stable,
+                    py::arg("mean_translation_m") = r.mean_translation_m,
+                    py::arg("max_translation_m") = r.max_translation_m,
+                    py::arg("max_rotation_deg") = r.max_rotation_deg,
+                    py::arg("least_stable_pair") = py::make_tuple(r.least_stable_pair.first,
+                                                                  r.least_stable_pair.second),
+                    py::arg("warnings") = r.warnings);
+  }
+
   py::list objects() const { return objectList(estimator_->objects()); }
   py::array trajectory() const { return poses(estimator_->trajectory()); }
   int numKeyframes() const { return estimator_->numKeyframes(); }
@@ -283,6 +310,9 @@ void bindModule(py::module_& m) {
            "The final map (a last stage I and II), contacts, "
            "trajectory.")
       .def("objects", &PyEstimator::objects)
+      .def("stability", &PyEstimator::stability,
+           "The map so far under gravity on its support plane (Bullet, the configuration's "
+           "physics settings): per object its motion and whether it is stable (docs/stability.md).")
       .def("bop_results", &PyEstimator::bopResults, py::arg("path") = py::none(),
            py::arg("scene_id") = 0,
            "Every keyframe's map objects in view as BOP results (CSV text, docs/results.md); "

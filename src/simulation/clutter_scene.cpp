@@ -1,8 +1,8 @@
 #include "geofusion/simulation/clutter_scene.h"
 
 #include "geofusion/model/fcl_hull.h"
+#include "geofusion/physics/rigid_world.h"
 
-#include <btBulletDynamicsCommon.h>
 #include <fcl/geometry/shape/box.h>
 
 #include <algorithm>
@@ -48,121 +48,45 @@ struct FclScene {
   fcl::CollisionObjectd* at(int i) { return &objects[static_cast<std::size_t>(i + 1)]; }
 };
 
-// Bullet world with the table and the bodies of the objects placed so far.
+// The generator's Bullet world (physics::RigidWorld): the table and the bodies of the objects
+// placed so far, each its collision hull with one mass.
 class Physics {
  public:
-  explicit Physics(const TableSpec& table)
-      : dispatcher_(&config_), world_(&dispatcher_, &broadphase_, &solver_, &config_) {
-    world_.setGravity(btVector3(0, 0, -9.81));
-    table_shape_ = std::make_unique<btBoxShape>(
-        btVector3(0.5 * table.size_x_m, 0.5 * table.size_y_m, 0.5 * table.thickness_m));
-    btTransform t;
-    t.setIdentity();
-    t.setOrigin(btVector3(0, 0, table.height_m - 0.5 * table.thickness_m));
-    table_state_ = std::make_unique<btDefaultMotionState>(t);
-    btRigidBody::btRigidBodyConstructionInfo info(0.0, table_state_.get(), table_shape_.get());
-    info.m_friction = 0.8;
-    table_body_ = std::make_unique<btRigidBody>(info);
-    world_.addRigidBody(table_body_.get());
-  }
-  ~Physics() {
-    for (auto& b : bodies_) world_.removeRigidBody(b.body.get());
-    world_.removeRigidBody(table_body_.get());
+  explicit Physics(const TableSpec& table) : world_(Eigen::Vector3d(0, 0, -9.81)) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation() = Eigen::Vector3d(0, 0, table.height_m - 0.5 * table.thickness_m);
+    world_.addStaticBox(T, Eigen::Vector3d(0.5 * table.size_x_m, 0.5 * table.size_y_m, 0.5 * table.thickness_m),
+                        0.8, 0.0);
   }
 
   int add(const ObjectModel& model, const Eigen::Isometry3d& T_world_obj) {
-    Body b;
-    const TriangleMesh hull = collisionHullOf(model);
-    Eigen::Vector3f c = Eigen::Vector3f::Zero();
-    for (const auto& v : hull.vertices) c += v;
-    c /= static_cast<float>(hull.vertices.size());
-    b.offset = c.cast<double>();  // body frame = model frame shifted to the hull centroid
-    b.shape = std::make_unique<btConvexHullShape>();
-    for (const auto& v : hull.vertices) {
-      const Eigen::Vector3f p = v - c;
-      b.shape->addPoint(btVector3(p.x(), p.y(), p.z()), false);
-    }
-    b.shape->recalcLocalAabb();
-    b.shape->setMargin(0.0005f);
-    const btScalar mass = 0.3f;
-    btVector3 inertia;
-    b.shape->calculateLocalInertia(mass, inertia);
-    b.state = std::make_unique<btDefaultMotionState>(
-        toBullet(T_world_obj * Eigen::Translation3d(b.offset)));
-    btRigidBody::btRigidBodyConstructionInfo info(mass, b.state.get(), b.shape.get(), inertia);
-    info.m_friction = 0.7;
-    info.m_rollingFriction = 0.002;
-    info.m_spinningFriction = 0.002;
-    info.m_restitution = 0.0;
-    info.m_linearDamping = 0.2;
-    info.m_angularDamping = 0.4;
-    b.body = std::make_unique<btRigidBody>(info);
-    b.body->setActivationState(DISABLE_DEACTIVATION);
-    world_.addRigidBody(b.body.get());
-    bodies_.push_back(std::move(b));
-    return static_cast<int>(bodies_.size()) - 1;
+    physics::RigidBodyOptions body;
+    body.mass_kg = 0.3;
+    body.friction = 0.7;
+    body.rolling_friction = 0.002;
+    body.linear_damping = 0.2;
+    body.angular_damping = 0.4;
+    return static_cast<int>(world_.add({collisionHullOf(model)}, T_world_obj, body));
   }
 
-  void remove(int i) {
-    world_.removeRigidBody(bodies_[i].body.get());
-    bodies_.erase(bodies_.begin() + i);
-  }
+  void remove(int i) { world_.remove(static_cast<std::size_t>(i)); }
 
   /// Steps until everything rests (or max_s of simulated time).
   void settle(double max_s) {
     const double dt = 1.0 / 240.0;
     int quiet = 0;
     for (double t = 0.0; t < max_s; t += dt) {
-      world_.stepSimulation(static_cast<btScalar>(dt), 1, static_cast<btScalar>(dt));
-      bool moving = false;
-      for (const auto& b : bodies_) {
-        if (b.body->getLinearVelocity().length() > 0.002 ||
-            b.body->getAngularVelocity().length() > 0.02) {
-          moving = true;
-          break;
-        }
-      }
-      quiet = moving ? 0 : quiet + 1;
+      world_.step(dt);
+      quiet = world_.moving(0.002, 0.02) ? 0 : quiet + 1;
       if (quiet > 24) break;  // 0.1 s at rest
     }
   }
 
-  Eigen::Isometry3d pose(int i) const {
-    btTransform t;
-    bodies_[i].state->getWorldTransform(t);
-    return fromBullet(t) * Eigen::Translation3d(-bodies_[i].offset);
-  }
-  std::size_t size() const { return bodies_.size(); }
+  Eigen::Isometry3d pose(int i) const { return world_.pose(static_cast<std::size_t>(i)); }
+  std::size_t size() const { return world_.size(); }
 
  private:
-  struct Body {
-    std::unique_ptr<btConvexHullShape> shape;
-    std::unique_ptr<btDefaultMotionState> state;
-    std::unique_ptr<btRigidBody> body;
-    Eigen::Vector3d offset = Eigen::Vector3d::Zero();
-  };
-  static btTransform toBullet(const Eigen::Isometry3d& T) {
-    const Eigen::Quaterniond q(T.linear());
-    return btTransform(btQuaternion(q.x(), q.y(), q.z(), q.w()),
-                       btVector3(T.translation().x(), T.translation().y(), T.translation().z()));
-  }
-  static Eigen::Isometry3d fromBullet(const btTransform& t) {
-    const btQuaternion q = t.getRotation();
-    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-    T.linear() = Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z()).normalized().toRotationMatrix();
-    T.translation() = Eigen::Vector3d(t.getOrigin().x(), t.getOrigin().y(), t.getOrigin().z());
-    return T;
-  }
-
-  btDefaultCollisionConfiguration config_;
-  btCollisionDispatcher dispatcher_;
-  btDbvtBroadphase broadphase_;
-  btSequentialImpulseConstraintSolver solver_;
-  btDiscreteDynamicsWorld world_;
-  std::unique_ptr<btBoxShape> table_shape_;
-  std::unique_ptr<btDefaultMotionState> table_state_;
-  std::unique_ptr<btRigidBody> table_body_;
-  std::vector<Body> bodies_;
+  physics::RigidWorld world_;
 };
 
 }  // namespace

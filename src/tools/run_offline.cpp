@@ -25,6 +25,7 @@
 #include "geofusion/common/robot_names.h"
 #include "geofusion/config/config.h"
 #include "geofusion/estimation/bop_results.h"
+#include "geofusion/estimation/map_stability.h"
 #include "geofusion/estimation/run_results.h"
 #include "geofusion/estimation/scene_estimator.h"
 #include "geofusion/ros/estimator_pipeline.h"
@@ -493,6 +494,30 @@ bool writeOutputs(const Options& opt, geofusion::EstimatorPipeline* pipeline,
   return true;
 }
 
+// The final map under gravity on its support plane (physics/stability.h): would it stand?
+void printStability(const geofusion::GeoFusionConfig& config, const geofusion::RunResults& results) {
+  using namespace geofusion;
+  const physics::StabilityResult s = checkMapStability(
+      results.final_map.objects, &results.support_plane, config.estimator.gravity, config.physics);
+  std::printf(
+      "run_offline: stability (%.1f s of gravity): %d of %d objects stable, %d more start "
+      "interpenetrating; motion %.1f mm mean, %.1f mm / %.1f deg max",
+      config.physics.duration_s, s.stable, s.checked, s.interpenetrating,
+      1000 * s.mean_translation_m, 1000 * s.max_translation_m, s.max_rotation_deg);
+  if (s.least_stable_pair.first != -1) {
+    auto name = [&](int id) {
+      if (id == physics::kPlaneId) return std::string("table");
+      for (const ObjectEstimate& o : results.final_map.objects)
+        if (o.id == id) return o.model->name + " #" + std::to_string(id);
+      return "#" + std::to_string(id);
+    };
+    std::printf("; least stable pair %s / %s (%.1f mm)", name(s.least_stable_pair.first).c_str(),
+                name(s.least_stable_pair.second).c_str(), 1000 * s.least_stable_pair_m);
+  }
+  std::printf("\n");
+  for (const std::string& w : s.warnings) std::printf("run_offline: stability: %s\n", w.c_str());
+}
+
 // What the run made: the background, keyframes and objects, its speed, the detections used.
 void printSummary(const Options& opt, const geofusion::GeoFusionConfig& config,
                   const geofusion::VisionDetectionConverter& vision,
@@ -517,6 +542,7 @@ void printSummary(const Options& opt, const geofusion::GeoFusionConfig& config,
       results.final_map.contacts.size(), results.wall_time_s, duration,
       duration > 0 ? results.wall_time_s / duration : 0.0, opt.out.c_str());
   std::printf("run_offline: detections: %s\n", pipeline->tally().summary().c_str());
+  printStability(config, results);
   std::printf("run_offline: objects removed: %s; relocalisation searched: %s\n",
               reasonsLine(removalsByReason(results)).c_str(),
               reasonsLine(relocalisationsByDecision(results)).c_str());

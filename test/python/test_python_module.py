@@ -88,14 +88,14 @@ def demo():
     out = tempfile.mkdtemp(prefix='geofusion_python_')
     bag = util.generate_demo(out, KEYFRAMES)
     results = os.path.join(out, 'results.yaml')
-    subprocess.check_call([util.find_tool('run_offline'), '--bag', bag, '--out', results,
-                           '--quiet'], stdout=subprocess.DEVNULL)
+    printed = subprocess.check_output([util.find_tool('run_offline'), '--bag', bag, '--out',
+                                       results, '--quiet'], universal_newlines=True)
     with open(results) as f:
-        return bag, yaml.safe_load(f)
+        return bag, yaml.safe_load(f), printed
 
 
 def test_the_demo_through_the_module_is_run_offlines_map(demo):
-    bag, expected = demo
+    bag, expected, printed = demo
     stamps = [k['stamp'] for k in expected['keyframes']]
     assert len(stamps) >= KEYFRAMES - 1
     estimator = gf.SceneEstimator(gf.load_model_set('primitives'), gf.load_config())
@@ -121,10 +121,21 @@ def test_the_demo_through_the_module_is_run_offlines_map(demo):
     assert [c[:4] for c in got_contacts] == [c[:4] for c in want_contacts]
     np.testing.assert_allclose([c[4] for c in got_contacts], [c[4] for c in want_contacts],
                                rtol=0, atol=1e-9)
+    # The same map under gravity: the module's check says what run_offline's summary says.
+    stability = estimator.stability()
+    assert sorted(o['id'] for o in stability['objects']) == sorted(want)
+    assert stability['has_plane'] and not stability['warnings']
+    assert stability['checked'] + stability['interpenetrating'] == len(want)
+    assert all(np.isfinite(o['translation_m']) and o['stable'] == (
+        not o['interpenetrating'] and o['translation_m'] < 0.005 and o['rotation_deg'] < 3.0)
+        for o in stability['objects'])
+    line = next(l for l in printed.splitlines() if l.startswith('run_offline: stability'))
+    assert '%d of %d objects stable, %d more start interpenetrating' % (
+        stability['stable'], stability['checked'], stability['interpenetrating']) in line, line
 
 
 def test_a_keyframes_result_is_plain_python(demo):
-    bag, expected = demo
+    bag, expected, _ = demo
     estimator = gf.SceneEstimator(gf.load_model_set(), {'method': 'geofusion'})
     depth, K, pose, detections, stamp = recording_keyframes(
         bag, [expected['keyframes'][0]['stamp']])[0]

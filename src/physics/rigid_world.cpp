@@ -1,0 +1,189 @@
+#include "geofusion/physics/rigid_world.h"
+
+#include <btBulletDynamicsCommon.h>
+
+#include <algorithm>
+
+namespace geofusion {
+namespace physics {
+namespace {
+
+btVector3 bt(const Eigen::Vector3d& v) {
+  return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z()));
+}
+
+btTransform toBullet(const Eigen::Isometry3d& T) {
+  const Eigen::Quaterniond q(T.linear());
+  return btTransform(btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w())),
+                     bt(T.translation()));
+}
+
+Eigen::Isometry3d fromBullet(const btTransform& t) {
+  const btQuaternion q = t.getRotation();
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z()).normalized().toRotationMatrix();
+  T.translation() = Eigen::Vector3d(t.getOrigin().x(), t.getOrigin().y(), t.getOrigin().z());
+  return T;
+}
+
+std::unique_ptr<btConvexHullShape> hullShape(const TriangleMesh& mesh, const Eigen::Vector3f& centre) {
+  auto hull = std::make_unique<btConvexHullShape>();
+  for (const Eigen::Vector3f& v : mesh.vertices) {
+    const Eigen::Vector3f p = v - centre;
+    hull->addPoint(btVector3(p.x(), p.y(), p.z()), false);
+  }
+  hull->recalcLocalAabb();
+  hull->setMargin(btScalar(0.0005));
+  return hull;
+}
+
+}  // namespace
+
+struct RigidWorld::Impl {
+  struct Body {
+    std::vector<std::unique_ptr<btConvexHullShape>> hulls;
+    std::unique_ptr<btCompoundShape> compound;  ///< several shapes: the hulls about the principal axes
+    std::unique_ptr<btDefaultMotionState> state;
+    std::unique_ptr<btRigidBody> rigid;
+    /// One hull: the body frame is the model frame shifted by `offset` (the vertices' mean).
+    Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+    /// A compound: the body frame in the model frame (centre of mass, principal axes).
+    Eigen::Isometry3d T_obj_body = Eigen::Isometry3d::Identity();
+  };
+  struct Static {
+    std::unique_ptr<btBoxShape> shape;
+    std::unique_ptr<btDefaultMotionState> state;
+    std::unique_ptr<btRigidBody> rigid;
+  };
+
+  Impl() : dispatcher(&collision_config), world(&dispatcher, &broadphase, &solver, &collision_config) {}
+  ~Impl() {
+    for (Body& b : bodies) world.removeRigidBody(b.rigid.get());
+    for (Static& s : statics) world.removeRigidBody(s.rigid.get());
+  }
+
+  // Mass 0 in the options: a compound of every shape, each as heavy as its volume.
+  void makeCompound(const std::vector<TriangleMesh>& shapes, const RigidBodyOptions& o, Body* b,
+                    btScalar* mass, btVector3* inertia) {
+    btCompoundShape in_model_frame(false);
+    std::vector<btScalar> masses;
+    btTransform identity;
+    identity.setIdentity();
+    for (const TriangleMesh& s : shapes) {
+      b->hulls.push_back(hullShape(s, Eigen::Vector3f::Zero()));
+      in_model_frame.addChildShape(identity, b->hulls.back().get());
+      masses.push_back(btScalar(o.density_kg_m3 * std::max(enclosedVolume(s), 1e-9)));
+    }
+    btTransform principal;
+    in_model_frame.calculatePrincipalAxisTransform(masses.data(), principal, *inertia);
+    b->T_obj_body = fromBullet(principal);
+    b->compound = std::make_unique<btCompoundShape>(false);
+    const btTransform body_from_model = principal.inverse();
+    for (int i = 0; i < in_model_frame.getNumChildShapes(); ++i)
+      b->compound->addChildShape(body_from_model * in_model_frame.getChildTransform(i),
+                                 in_model_frame.getChildShape(i));
+    *mass = 0;
+    for (btScalar m : masses) *mass += m;
+  }
+
+  btDefaultCollisionConfiguration collision_config;
+  btCollisionDispatcher dispatcher;
+  btDbvtBroadphase broadphase;
+  btSequentialImpulseConstraintSolver solver;
+  btDiscreteDynamicsWorld world;
+  std::vector<Static> statics;
+  std::vector<Body> bodies;
+};
+
+RigidWorld::RigidWorld(const Eigen::Vector3d& gravity) : impl_(std::make_unique<Impl>()) {
+  impl_->world.setGravity(bt(gravity));
+}
+
+RigidWorld::~RigidWorld() = default;
+
+void RigidWorld::addStaticBox(const Eigen::Isometry3d& T_world_box, const Eigen::Vector3d& half_extents,
+                              double friction, double rolling_friction) {
+  Impl::Static s;
+  s.shape = std::make_unique<btBoxShape>(bt(half_extents));
+  s.state = std::make_unique<btDefaultMotionState>(toBullet(T_world_box));
+  btRigidBody::btRigidBodyConstructionInfo info(0.0, s.state.get(), s.shape.get());
+  info.m_friction = btScalar(friction);
+  info.m_rollingFriction = btScalar(rolling_friction);
+  info.m_spinningFriction = btScalar(rolling_friction);
+  s.rigid = std::make_unique<btRigidBody>(info);
+  impl_->world.addRigidBody(s.rigid.get());
+  impl_->statics.push_back(std::move(s));
+}
+
+std::size_t RigidWorld::add(const std::vector<TriangleMesh>& shapes, const Eigen::Isometry3d& T_world_obj,
+                            const RigidBodyOptions& o) {
+  Impl::Body b;
+  btScalar mass = 0;
+  btVector3 inertia(0, 0, 0);
+  btCollisionShape* shape = nullptr;
+  if (o.mass_kg > 0.0 && !shapes.empty()) {
+    const TriangleMesh& hull = shapes.front();
+    Eigen::Vector3f c = Eigen::Vector3f::Zero();
+    for (const auto& v : hull.vertices) c += v;
+    c /= static_cast<float>(hull.vertices.size());
+    b.offset = c.cast<double>();
+    b.hulls.push_back(hullShape(hull, c));
+    mass = btScalar(o.mass_kg);
+    b.hulls.back()->calculateLocalInertia(mass, inertia);
+    shape = b.hulls.back().get();
+    b.state = std::make_unique<btDefaultMotionState>(toBullet(T_world_obj * Eigen::Translation3d(b.offset)));
+  } else {
+    impl_->makeCompound(shapes, o, &b, &mass, &inertia);
+    shape = b.compound.get();
+    b.state = std::make_unique<btDefaultMotionState>(toBullet(T_world_obj * b.T_obj_body));
+  }
+  btRigidBody::btRigidBodyConstructionInfo info(mass, b.state.get(), shape, inertia);
+  info.m_friction = btScalar(o.friction);
+  info.m_rollingFriction = btScalar(o.rolling_friction);
+  info.m_spinningFriction = btScalar(o.rolling_friction);
+  info.m_restitution = 0.0;
+  info.m_linearDamping = btScalar(o.linear_damping);
+  info.m_angularDamping = btScalar(o.angular_damping);
+  b.rigid = std::make_unique<btRigidBody>(info);
+  b.rigid->setActivationState(DISABLE_DEACTIVATION);
+  impl_->world.addRigidBody(b.rigid.get());
+  impl_->bodies.push_back(std::move(b));
+  return impl_->bodies.size() - 1;
+}
+
+void RigidWorld::remove(std::size_t index) {
+  impl_->world.removeRigidBody(impl_->bodies[index].rigid.get());
+  impl_->bodies.erase(impl_->bodies.begin() + static_cast<std::ptrdiff_t>(index));
+}
+
+void RigidWorld::step(double dt_s) {
+  impl_->world.stepSimulation(static_cast<btScalar>(dt_s), 1, static_cast<btScalar>(dt_s));
+}
+
+bool RigidWorld::moving(double linear_m_s, double angular_rad_s) const {
+  for (const Impl::Body& b : impl_->bodies) {
+    if (b.rigid->getLinearVelocity().length() > linear_m_s ||
+        b.rigid->getAngularVelocity().length() > angular_rad_s)
+      return true;
+  }
+  return false;
+}
+
+Eigen::Isometry3d RigidWorld::pose(std::size_t index) const {
+  const Impl::Body& b = impl_->bodies[index];
+  btTransform t;
+  b.state->getWorldTransform(t);
+  if (b.compound) return fromBullet(t) * b.T_obj_body.inverse();
+  return fromBullet(t) * Eigen::Translation3d(-b.offset);
+}
+
+Eigen::Vector3d RigidWorld::centreOfMass(std::size_t index) const {
+  btTransform t;
+  impl_->bodies[index].state->getWorldTransform(t);
+  return Eigen::Vector3d(t.getOrigin().x(), t.getOrigin().y(), t.getOrigin().z());
+}
+
+std::size_t RigidWorld::size() const { return impl_->bodies.size(); }
+
+}  // namespace physics
+}  // namespace geofusion
