@@ -646,7 +646,11 @@ class Table {
   void physics() {
     const std::string p = "physics.";
     auto f = [](GeoFusionConfig& c) { return &c.physics; };
-    real(p + "duration_s", 1e-3, 60, "stability check: simulated time under gravity, s",
+    flag(p + "convex_parts",
+         "stability check: bodies of the models' convex parts (true) or of their convex hulls, as "
+         "the generator settles its scenes (false)",
+         [f](GeoFusionConfig& c) { return &f(c)->convex_parts; });
+    real(p + "duration_s", 1e-3, 60, "... simulated time under gravity, s",
          [f](GeoFusionConfig& c) { return &f(c)->duration_s; });
     real(p + "time_step_s", 1e-4, 0.02, "... Bullet's fixed step, s",
          [f](GeoFusionConfig& c) { return &f(c)->time_step_s; });

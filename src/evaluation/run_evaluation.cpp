@@ -729,7 +729,8 @@ nlohmann::json stabilityResultJson(const physics::StabilityResult& r) {
 nlohmann::json stabilityJson(const RunEvaluation& e) {
   const physics::StabilityConfig& c = e.stability_config;
   return {{"settings",
-           {{"duration_s", c.duration_s},
+           {{"convex_parts", c.convex_parts},
+            {"duration_s", c.duration_s},
             {"time_step_s", c.time_step_s},
             {"density_kg_m3", c.density_kg_m3},
             {"friction", c.friction},

@@ -26,6 +26,9 @@ Eigen::Isometry3d fromBullet(const btTransform& t) {
   return T;
 }
 
+/// Bullet's collision margin of every hull, m (the generator's bodies are rounded by it).
+constexpr double kHullMargin = 0.0005;
+
 std::unique_ptr<btConvexHullShape> hullShape(const TriangleMesh& mesh, const Eigen::Vector3f& centre) {
   auto hull = std::make_unique<btConvexHullShape>();
   for (const Eigen::Vector3f& v : mesh.vertices) {
@@ -33,9 +36,39 @@ std::unique_ptr<btConvexHullShape> hullShape(const TriangleMesh& mesh, const Eig
     hull->addPoint(btVector3(p.x(), p.y(), p.z()), false);
   }
   hull->recalcLocalAabb();
-  hull->setMargin(btScalar(0.0005));
+  hull->setMargin(btScalar(kHullMargin));
   return hull;
 }
+
+// Bullet rounds a convex hull outwards by its collision margin. The compound bodies' hulls are
+// first moved inwards by the margin, so that the rounded shape is the model's own and objects that
+// touch in the map touch in the simulation (not 1 mm into each other, pushed apart): each vertex
+// by the vector whose dot product with every adjacent face's normal is the margin (least squares;
+// at most 3 margins long at a sharp tip).
+TriangleMesh shrunkByMargin(const TriangleMesh& hull, double margin) {
+  std::vector<std::vector<Eigen::Vector3d>> normals(hull.vertices.size());
+  for (const Eigen::Vector3i& t : hull.triangles) {
+    const Eigen::Vector3d a = hull.vertices[t[0]].cast<double>(), b = hull.vertices[t[1]].cast<double>(),
+                          c = hull.vertices[t[2]].cast<double>();
+    const Eigen::Vector3d n = (b - a).cross(c - a);
+    if (n.norm() < 1e-12) continue;
+    for (int k = 0; k < 3; ++k) normals[t[k]].push_back(n.normalized());
+  }
+  TriangleMesh out = hull;
+  for (std::size_t i = 0; i < hull.vertices.size(); ++i) {
+    if (normals[i].empty()) continue;
+    Eigen::MatrixXd A(normals[i].size(), 3);
+    for (std::size_t k = 0; k < normals[i].size(); ++k) A.row(k) = normals[i][k].transpose();
+    Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(A);
+    cod.setThreshold(0.05);
+    Eigen::Vector3d inward = cod.solve(Eigen::VectorXd::Constant(A.rows(), margin));
+    if (!inward.allFinite()) continue;
+    if (inward.norm() > 3 * margin) inward *= 3 * margin / inward.norm();
+    out.vertices[i] -= inward.cast<float>();
+  }
+  return out;
+}
+
 
 }  // namespace
 
@@ -70,7 +103,7 @@ struct RigidWorld::Impl {
     btTransform identity;
     identity.setIdentity();
     for (const TriangleMesh& s : shapes) {
-      b->hulls.push_back(hullShape(s, Eigen::Vector3f::Zero()));
+      b->hulls.push_back(hullShape(shrunkByMargin(s, kHullMargin), Eigen::Vector3f::Zero()));
       in_model_frame.addChildShape(identity, b->hulls.back().get());
       masses.push_back(btScalar(o.density_kg_m3 * std::max(enclosedVolume(s), 1e-9)));
     }

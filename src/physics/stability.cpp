@@ -13,11 +13,13 @@ namespace geofusion {
 namespace physics {
 namespace {
 
-/// The convex pieces a body is made of: the model's convex parts, else its collision hull.
-std::vector<TriangleMesh> collisionShapes(const ObjectModel& model) {
+/// The convex pieces a body is made of: the model's convex parts (when asked for and it has
+/// them), else its collision hull.
+std::vector<TriangleMesh> collisionShapes(const ObjectModel& model, bool convex_parts) {
   std::vector<TriangleMesh> shapes;
-  for (const TriangleMesh& part : model.collision_parts)
-    if (!part.empty()) shapes.push_back(part);
+  if (convex_parts)
+    for (const TriangleMesh& part : model.collision_parts)
+      if (!part.empty()) shapes.push_back(part);
   if (shapes.empty()) {
     TriangleMesh hull = collisionHullOf(model);
     if (!hull.empty()) shapes.push_back(std::move(hull));
@@ -96,7 +98,9 @@ std::vector<std::pair<int, int>> startContacts(const std::vector<StabilityBody>&
                                       prepared[b].box.max().array() + config.contact_distance_m);
       if (!grown.intersects(prepared[a].box)) continue;
       const StabilityBody& B = bodies[prepared[b].index];
-      const double depth = collider.partsPenetration(A.model, A.T_world_obj, B.model, B.T_world_obj);
+      const double depth =
+          config.convex_parts ? collider.partsPenetration(A.model, A.T_world_obj, B.model, B.T_world_obj)
+                              : collider.penetration(A.model, A.T_world_obj, B.model, B.T_world_obj);
       if (depth > 0.0) {
         deepen((*motions)[prepared[a].index], depth, B.id);
         deepen((*motions)[prepared[b].index], depth, A.id);
@@ -218,7 +222,7 @@ StabilityResult checkStability(const std::vector<StabilityBody>& bodies, const S
     std::vector<TriangleMesh> shapes;
     if (!bodies[i].model) m.problem = "no model";
     else if (!bodies[i].T_world_obj.matrix().allFinite()) m.problem = "pose not finite";
-    else if ((shapes = collisionShapes(*bodies[i].model)).empty()) m.problem = "no collision shape";
+    else if ((shapes = collisionShapes(*bodies[i].model, c.convex_parts)).empty()) m.problem = "no collision shape";
     if (!m.problem.empty()) {
       result.warnings.push_back("object " + std::to_string(m.id) + " (" +
                                 (bodies[i].model ? bodies[i].model->name : std::string("?")) +

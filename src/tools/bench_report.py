@@ -1080,9 +1080,10 @@ def stability_section(methods):
         return []
     c = have[0][1]['stability_settings']
     md = ['## Stability (Bullet, %.1f s of gravity)' % c['duration_s'], '',
-          'Each final map on its support plane as the objects\' convex parts (density %g kg/m^3, '
+          'Each final map on its support plane as the objects\' %s (density %g kg/m^3, '
           'friction %g); stable: moves under %g mm and %g deg. Objects that start more than %g mm '
           'into another or the table are counted apart (not stable).' % (
+              'convex parts' if c.get('convex_parts') else 'convex hulls',
               c['density_kg_m3'], c['friction'], 1000 * c['stable_translation_m'],
               c['stable_rotation_deg'], 1000 * c['start_penetration_m']), '']
     rows = [[n, '%d / %d' % (m['stability_true_stable'], m['stability_true_objects']),

@@ -18,6 +18,10 @@ namespace physics {
 
 /// Settings of the check (YAML section `physics`, docs/parameters.md).
 struct StabilityConfig {
+  /// The bodies' shapes: false, each model's convex collision hull (what the data generator
+  /// settles its scenes with and the evaluation's interpenetration measures); true, its convex
+  /// parts (ObjectModel::collision_parts: a bowl's hollow, a drill's handle).
+  bool convex_parts = false;
   double duration_s = 1.0;             ///< simulated time under gravity
   double time_step_s = 1.0 / 240.0;    ///< Bullet's fixed step
   double density_kg_m3 = 600.0;        ///< one density for every object: mass = density x volume
