@@ -654,7 +654,8 @@ class Table {
          [f](GeoFusionConfig& c) { return &f(c)->duration_s; });
     real(p + "time_step_s", 1e-4, 0.02, "... Bullet's fixed step, s",
          [f](GeoFusionConfig& c) { return &f(c)->time_step_s; });
-    real(p + "density_kg_m3", 10, 20000, "... every object's density (mass = density x volume), kg/m^3",
+    real(p + "density_kg_m3", 10, 20000,
+         "... every object's density (mass = density x volume), kg/m^3",
          [f](GeoFusionConfig& c) { return &f(c)->density_kg_m3; });
     real(p + "friction", 0, 2, "... Coulomb friction of objects and support plane",
          [f](GeoFusionConfig& c) { return &f(c)->friction; });
@@ -666,14 +667,17 @@ class Table {
          [f](GeoFusionConfig& c) { return &f(c)->angular_damping; });
     real(p + "gravity_m_s2", 0.01, 50, "... gravity along the map's gravity direction, m/s^2",
          [f](GeoFusionConfig& c) { return &f(c)->gravity_m_s2; });
-    real(p + "stable_translation_m", 1e-6, 1, "... stable: the centre of mass moves less than this, m",
+    real(p + "stable_translation_m", 1e-6, 1,
+         "... stable: the centre of mass moves less than this, m",
          [f](GeoFusionConfig& c) { return &f(c)->stable_translation_m; });
     real(p + "stable_rotation_deg", 1e-3, 180, "... and the object turns less than this, deg",
          [f](GeoFusionConfig& c) { return &f(c)->stable_rotation_deg; });
-    real(p + "start_penetration_m", 0, 1,
-         "... objects deeper than this into another or the plane at the start are reported apart, m",
-         [f](GeoFusionConfig& c) { return &f(c)->start_penetration_m; });
-    real(p + "contact_distance_m", 0, 1, "... objects closer than this at the start are a pair in contact, m",
+    real(
+        p + "start_penetration_m", 0, 1,
+        "... objects deeper than this into another or the plane at the start are reported apart, m",
+        [f](GeoFusionConfig& c) { return &f(c)->start_penetration_m; });
+    real(p + "contact_distance_m", 0, 1,
+         "... objects closer than this at the start are a pair in contact, m",
          [f](GeoFusionConfig& c) { return &f(c)->contact_distance_m; });
   }
   void visionMsgs() {

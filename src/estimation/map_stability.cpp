@@ -3,7 +3,8 @@
 namespace geofusion {
 
 physics::StabilityResult checkMapStability(const std::vector<ObjectEstimate>& objects,
-                                           const SupportPlane* plane, const Eigen::Vector3d& gravity,
+                                           const SupportPlane* plane,
+                                           const Eigen::Vector3d& gravity,
                                            const physics::StabilityConfig& config) {
   std::vector<physics::StabilityBody> bodies;
   bodies.reserve(objects.size());

@@ -552,15 +552,16 @@ void evaluateStability(const GroundTruth& gt, const RunResults& results, const M
     ev->stability_true_interpenetrating += m && m->interpenetrating;
   }
   const auto& [a, b] = ev->stability.least_stable_pair;
-  if (a != -1) ev->least_stable_pair = describeBody(map, score, a) + " / " + describeBody(map, score, b);
+  if (a != -1)
+    ev->least_stable_pair = describeBody(map, score, a) + " / " + describeBody(map, score, b);
   for (const std::string& w : ev->stability.warnings) ev->warnings.push_back("stability: " + w);
 
   std::vector<physics::StabilityBody> truth;
   for (std::size_t i = 0; i < gt.scene.objects.size(); ++i)
     truth.push_back({int(i), gt.scene.objects[i].model, gt.scene.objects[i].T_world_obj});
   const physics::StabilityPlane true_table{Eigen::Vector3d::UnitZ(), gt.scene.table.height_m};
-  ev->stability_truth = physics::checkStability(truth, &true_table, -Eigen::Vector3d::UnitZ(),
-                                                ev->stability_config);
+  ev->stability_truth =
+      physics::checkStability(truth, &true_table, -Eigen::Vector3d::UnitZ(), ev->stability_config);
   ev->has_stability = true;
 }
 

@@ -14,8 +14,9 @@ btVector3 bt(const Eigen::Vector3d& v) {
 
 btTransform toBullet(const Eigen::Isometry3d& T) {
   const Eigen::Quaterniond q(T.linear());
-  return btTransform(btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w())),
-                     bt(T.translation()));
+  return btTransform(
+      btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w())),
+      bt(T.translation()));
 }
 
 Eigen::Isometry3d fromBullet(const btTransform& t) {
@@ -29,7 +30,8 @@ Eigen::Isometry3d fromBullet(const btTransform& t) {
 /// Bullet's collision margin of every hull, m (the generator's bodies are rounded by it).
 constexpr double kHullMargin = 0.0005;
 
-std::unique_ptr<btConvexHullShape> hullShape(const TriangleMesh& mesh, const Eigen::Vector3f& centre) {
+std::unique_ptr<btConvexHullShape> hullShape(const TriangleMesh& mesh,
+                                             const Eigen::Vector3f& centre) {
   auto hull = std::make_unique<btConvexHullShape>();
   for (const Eigen::Vector3f& v : mesh.vertices) {
     const Eigen::Vector3f p = v - centre;
@@ -48,7 +50,8 @@ std::unique_ptr<btConvexHullShape> hullShape(const TriangleMesh& mesh, const Eig
 TriangleMesh shrunkByMargin(const TriangleMesh& hull, double margin) {
   std::vector<std::vector<Eigen::Vector3d>> normals(hull.vertices.size());
   for (const Eigen::Vector3i& t : hull.triangles) {
-    const Eigen::Vector3d a = hull.vertices[t[0]].cast<double>(), b = hull.vertices[t[1]].cast<double>(),
+    const Eigen::Vector3d a = hull.vertices[t[0]].cast<double>(),
+                          b = hull.vertices[t[1]].cast<double>(),
                           c = hull.vertices[t[2]].cast<double>();
     const Eigen::Vector3d n = (b - a).cross(c - a);
     if (n.norm() < 1e-12) continue;
@@ -69,13 +72,13 @@ TriangleMesh shrunkByMargin(const TriangleMesh& hull, double margin) {
   return out;
 }
 
-
 }  // namespace
 
 struct RigidWorld::Impl {
   struct Body {
     std::vector<std::unique_ptr<btConvexHullShape>> hulls;
-    std::unique_ptr<btCompoundShape> compound;  ///< several shapes: the hulls about the principal axes
+    std::unique_ptr<btCompoundShape>
+        compound;  ///< several shapes: the hulls about the principal axes
     std::unique_ptr<btDefaultMotionState> state;
     std::unique_ptr<btRigidBody> rigid;
     /// One hull: the body frame is the model frame shifted by `offset` (the vertices' mean).
@@ -89,7 +92,9 @@ struct RigidWorld::Impl {
     std::unique_ptr<btRigidBody> rigid;
   };
 
-  Impl() : dispatcher(&collision_config), world(&dispatcher, &broadphase, &solver, &collision_config) {}
+  Impl()
+      : dispatcher(&collision_config),
+        world(&dispatcher, &broadphase, &solver, &collision_config) {}
   ~Impl() {
     for (Body& b : bodies) world.removeRigidBody(b.rigid.get());
     for (Static& s : statics) world.removeRigidBody(s.rigid.get());
@@ -134,8 +139,9 @@ RigidWorld::RigidWorld(const Eigen::Vector3d& gravity) : impl_(std::make_unique<
 
 RigidWorld::~RigidWorld() = default;
 
-void RigidWorld::addStaticBox(const Eigen::Isometry3d& T_world_box, const Eigen::Vector3d& half_extents,
-                              double friction, double rolling_friction) {
+void RigidWorld::addStaticBox(const Eigen::Isometry3d& T_world_box,
+                              const Eigen::Vector3d& half_extents, double friction,
+                              double rolling_friction) {
   Impl::Static s;
   s.shape = std::make_unique<btBoxShape>(bt(half_extents));
   s.state = std::make_unique<btDefaultMotionState>(toBullet(T_world_box));
@@ -148,8 +154,8 @@ void RigidWorld::addStaticBox(const Eigen::Isometry3d& T_world_box, const Eigen:
   impl_->statics.push_back(std::move(s));
 }
 
-std::size_t RigidWorld::add(const std::vector<TriangleMesh>& shapes, const Eigen::Isometry3d& T_world_obj,
-                            const RigidBodyOptions& o) {
+std::size_t RigidWorld::add(const std::vector<TriangleMesh>& shapes,
+                            const Eigen::Isometry3d& T_world_obj, const RigidBodyOptions& o) {
   Impl::Body b;
   btScalar mass = 0;
   btVector3 inertia(0, 0, 0);
@@ -164,7 +170,8 @@ std::size_t RigidWorld::add(const std::vector<TriangleMesh>& shapes, const Eigen
     mass = btScalar(o.mass_kg);
     b.hulls.back()->calculateLocalInertia(mass, inertia);
     shape = b.hulls.back().get();
-    b.state = std::make_unique<btDefaultMotionState>(toBullet(T_world_obj * Eigen::Translation3d(b.offset)));
+    b.state = std::make_unique<btDefaultMotionState>(
+        toBullet(T_world_obj * Eigen::Translation3d(b.offset)));
   } else {
     impl_->makeCompound(shapes, o, &b, &mass, &inertia);
     shape = b.compound.get();
@@ -216,7 +223,9 @@ Eigen::Vector3d RigidWorld::centreOfMass(std::size_t index) const {
   return Eigen::Vector3d(t.getOrigin().x(), t.getOrigin().y(), t.getOrigin().z());
 }
 
-std::size_t RigidWorld::size() const { return impl_->bodies.size(); }
+std::size_t RigidWorld::size() const {
+  return impl_->bodies.size();
+}
 
 }  // namespace physics
 }  // namespace geofusion

@@ -32,13 +32,14 @@ double lowestAlong(const std::vector<TriangleMesh>& shapes, const Eigen::Isometr
                    const Eigen::Vector3d& up) {
   double lowest = std::numeric_limits<double>::infinity();
   for (const TriangleMesh& s : shapes)
-    for (const Eigen::Vector3f& v : s.vertices) lowest = std::min(lowest, up.dot(T * v.cast<double>()));
+    for (const Eigen::Vector3f& v : s.vertices)
+      lowest = std::min(lowest, up.dot(T * v.cast<double>()));
   return lowest;
 }
 
 /// The slab whose top face is the plane, under the bodies' centre, 10 cm thick.
-void addSupportSlab(const StabilityPlane& plane, const Eigen::Vector3d& centre, double half_extent_m,
-                    const StabilityConfig& config, RigidWorld* world) {
+void addSupportSlab(const StabilityPlane& plane, const Eigen::Vector3d& centre,
+                    double half_extent_m, const StabilityConfig& config, RigidWorld* world) {
   const double thickness = 0.1;
   const Eigen::Vector3d n = plane.normal.normalized();
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -99,14 +100,15 @@ std::vector<std::pair<int, int>> startContacts(const std::vector<StabilityBody>&
       if (!grown.intersects(prepared[a].box)) continue;
       const StabilityBody& B = bodies[prepared[b].index];
       const double depth =
-          config.convex_parts ? collider.partsPenetration(A.model, A.T_world_obj, B.model, B.T_world_obj)
-                              : collider.penetration(A.model, A.T_world_obj, B.model, B.T_world_obj);
+          config.convex_parts
+              ? collider.partsPenetration(A.model, A.T_world_obj, B.model, B.T_world_obj)
+              : collider.penetration(A.model, A.T_world_obj, B.model, B.T_world_obj);
       if (depth > 0.0) {
         deepen((*motions)[prepared[a].index], depth, B.id);
         deepen((*motions)[prepared[b].index], depth, A.id);
       }
-      if (depth > 0.0 ||
-          collider.distance(A.model, A.T_world_obj, B.model, B.T_world_obj) < config.contact_distance_m)
+      if (depth > 0.0 || collider.distance(A.model, A.T_world_obj, B.model, B.T_world_obj) <
+                             config.contact_distance_m)
         pairs.emplace_back(int(a), int(b));
     }
   }
@@ -148,7 +150,8 @@ void summarise(const std::vector<Prepared>& prepared, const std::vector<std::pai
       continue;
     }
     ++r->checked;
-    m.stable = m.translation_m < config.stable_translation_m && m.rotation_deg < config.stable_rotation_deg;
+    m.stable = m.translation_m < config.stable_translation_m &&
+               m.rotation_deg < config.stable_rotation_deg;
     r->stable += m.stable ? 1 : 0;
     sum += m.translation_m;
     r->max_translation_m = std::max(r->max_translation_m, m.translation_m);
@@ -177,17 +180,21 @@ std::vector<std::string> validate(const StabilityConfig& c) {
     s << "physics." << name << " = " << value << " is out of range (" << range << ")";
     errors.push_back(s.str());
   };
-  check(c.duration_s >= 1e-3 && c.duration_s <= 60.0, "duration_s", c.duration_s, "0.001 <= x <= 60");
-  check(c.time_step_s >= 1e-4 && c.time_step_s <= 0.02, "time_step_s", c.time_step_s, "0.0001 <= x <= 0.02");
+  check(c.duration_s >= 1e-3 && c.duration_s <= 60.0, "duration_s", c.duration_s,
+        "0.001 <= x <= 60");
+  check(c.time_step_s >= 1e-4 && c.time_step_s <= 0.02, "time_step_s", c.time_step_s,
+        "0.0001 <= x <= 0.02");
   check(c.density_kg_m3 >= 10.0 && c.density_kg_m3 <= 20000.0, "density_kg_m3", c.density_kg_m3,
         "10 <= x <= 20000");
   check(c.friction >= 0.0 && c.friction <= 2.0, "friction", c.friction, "0 <= x <= 2");
-  check(c.rolling_friction >= 0.0 && c.rolling_friction <= 0.1, "rolling_friction", c.rolling_friction,
-        "0 <= x <= 0.1");
-  check(c.linear_damping >= 0.0 && c.linear_damping <= 0.99, "linear_damping", c.linear_damping, "0 <= x <= 0.99");
+  check(c.rolling_friction >= 0.0 && c.rolling_friction <= 0.1, "rolling_friction",
+        c.rolling_friction, "0 <= x <= 0.1");
+  check(c.linear_damping >= 0.0 && c.linear_damping <= 0.99, "linear_damping", c.linear_damping,
+        "0 <= x <= 0.99");
   check(c.angular_damping >= 0.0 && c.angular_damping <= 0.99, "angular_damping", c.angular_damping,
         "0 <= x <= 0.99");
-  check(c.gravity_m_s2 >= 0.01 && c.gravity_m_s2 <= 50.0, "gravity_m_s2", c.gravity_m_s2, "0.01 <= x <= 50");
+  check(c.gravity_m_s2 >= 0.01 && c.gravity_m_s2 <= 50.0, "gravity_m_s2", c.gravity_m_s2,
+        "0.01 <= x <= 50");
   check(c.stable_translation_m >= 1e-6 && c.stable_translation_m <= 1.0, "stable_translation_m",
         c.stable_translation_m, "1e-6 <= x <= 1");
   check(c.stable_rotation_deg >= 1e-3 && c.stable_rotation_deg <= 180.0, "stable_rotation_deg",
@@ -205,24 +212,29 @@ const BodyMotion* StabilityResult::find(int id) const {
   return nullptr;
 }
 
-StabilityResult checkStability(const std::vector<StabilityBody>& bodies, const StabilityPlane* plane,
-                               const Eigen::Vector3d& gravity, const StabilityConfig& config) {
+StabilityResult checkStability(const std::vector<StabilityBody>& bodies,
+                               const StabilityPlane* plane, const Eigen::Vector3d& gravity,
+                               const StabilityConfig& config) {
   StabilityResult result;
   result.warnings = validate(config);
   const StabilityConfig defaults;
   const StabilityConfig& c = result.warnings.empty() ? config : defaults;
   if (!result.warnings.empty()) result.warnings.push_back("physics: the defaults are used instead");
   Eigen::Vector3d g = gravity.allFinite() && gravity.norm() > 1e-9 ? gravity.normalized()
-                      : plane ? -plane->normal.normalized() : Eigen::Vector3d(0, 0, -1);
+                      : plane                                      ? -plane->normal.normalized()
+                                                                   : Eigen::Vector3d(0, 0, -1);
   std::vector<Prepared> prepared;
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     BodyMotion m;
     m.id = bodies[i].id;
     std::vector<TriangleMesh> shapes;
-    if (!bodies[i].model) m.problem = "no model";
-    else if (!bodies[i].T_world_obj.matrix().allFinite()) m.problem = "pose not finite";
-    else if ((shapes = collisionShapes(*bodies[i].model, c.convex_parts)).empty()) m.problem = "no collision shape";
+    if (!bodies[i].model)
+      m.problem = "no model";
+    else if (!bodies[i].T_world_obj.matrix().allFinite())
+      m.problem = "pose not finite";
+    else if ((shapes = collisionShapes(*bodies[i].model, c.convex_parts)).empty())
+      m.problem = "no collision shape";
     if (!m.problem.empty()) {
       result.warnings.push_back("object " + std::to_string(m.id) + " (" +
                                 (bodies[i].model ? bodies[i].model->name : std::string("?")) +
@@ -242,7 +254,8 @@ StabilityResult checkStability(const std::vector<StabilityBody>& bodies, const S
   const auto pairs = startContacts(bodies, prepared, support, c, &result.bodies);
 
   double spread = 0.5;
-  for (const Prepared& p : prepared) spread = std::max(spread, (p.box.center() - centre).norm() + p.box.diagonal().norm());
+  for (const Prepared& p : prepared)
+    spread = std::max(spread, (p.box.center() - centre).norm() + p.box.diagonal().norm());
   RigidWorld world(g * c.gravity_m_s2);
   addSupportSlab(support, centre, spread + 0.5, c, &world);
   std::vector<Eigen::Vector3d> com_before;

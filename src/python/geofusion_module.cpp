@@ -161,25 +161,25 @@ class PyEstimator {
   // settings of the configuration).
   py::dict stability() const {
     const SupportPlane& plane = estimator_->supportPlane();
-    const physics::StabilityResult r =
-        checkMapStability(estimator_->objects(), &plane, config_.estimator.gravity, config_.physics);
+    const physics::StabilityResult r = checkMapStability(
+        estimator_->objects(), &plane, config_.estimator.gravity, config_.physics);
     py::list bodies;
     for (const physics::BodyMotion& m : r.bodies)
-      bodies.append(py::dict(py::arg("id") = m.id, py::arg("simulated") = m.simulated,
-                             py::arg("problem") = m.problem, py::arg("translation_m") = m.translation_m,
-                             py::arg("rotation_deg") = m.rotation_deg,
-                             py::arg("start_penetration_m") = m.start_penetration_m,
-                             py::arg("penetrating_id") = m.penetrating_id,
-                             py::arg("interpenetrating") = m.interpenetrating,
-                             py::arg("stable") = m.stable));
+      bodies.append(py::dict(
+          py::arg("id") = m.id, py::arg("simulated") = m.simulated, py::arg("problem") = m.problem,
+          py::arg("translation_m") = m.translation_m, py::arg("rotation_deg") = m.rotation_deg,
+          py::arg("start_penetration_m") = m.start_penetration_m,
+          py::arg("penetrating_id") = m.penetrating_id,
+          py::arg("interpenetrating") = m.interpenetrating, py::arg("stable") = m.stable));
     return py::dict(py::arg("objects") = bodies, py::arg("has_plane") = r.has_plane,
-                    py::arg("simulated") = r.simulated, py::arg("interpenetrating") = r.interpenetrating,
+                    py::arg("simulated") = r.simulated,
+                    py::arg("interpenetrating") = r.interpenetrating,
                     py::arg("checked") = r.checked, py::arg("stable") = r.stable,
                     py::arg("mean_translation_m") = r.mean_translation_m,
                     py::arg("max_translation_m") = r.max_translation_m,
                     py::arg("max_rotation_deg") = r.max_rotation_deg,
-                    py::arg("least_stable_pair") = py::make_tuple(r.least_stable_pair.first,
-                                                                  r.least_stable_pair.second),
+                    py::arg("least_stable_pair") =
+                        py::make_tuple(r.least_stable_pair.first, r.least_stable_pair.second),
                     py::arg("warnings") = r.warnings);
   }
 

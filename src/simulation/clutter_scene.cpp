@@ -55,8 +55,9 @@ class Physics {
   explicit Physics(const TableSpec& table) : world_(Eigen::Vector3d(0, 0, -9.81)) {
     Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
     T.translation() = Eigen::Vector3d(0, 0, table.height_m - 0.5 * table.thickness_m);
-    world_.addStaticBox(T, Eigen::Vector3d(0.5 * table.size_x_m, 0.5 * table.size_y_m, 0.5 * table.thickness_m),
-                        0.8, 0.0);
+    world_.addStaticBox(
+        T, Eigen::Vector3d(0.5 * table.size_x_m, 0.5 * table.size_y_m, 0.5 * table.thickness_m),
+        0.8, 0.0);
   }
 
   int add(const ObjectModel& model, const Eigen::Isometry3d& T_world_obj) {

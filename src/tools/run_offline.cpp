@@ -495,7 +495,8 @@ bool writeOutputs(const Options& opt, geofusion::EstimatorPipeline* pipeline,
 }
 
 // The final map under gravity on its support plane (physics/stability.h): would it stand?
-void printStability(const geofusion::GeoFusionConfig& config, const geofusion::RunResults& results) {
+void printStability(const geofusion::GeoFusionConfig& config,
+                    const geofusion::RunResults& results) {
   using namespace geofusion;
   const physics::StabilityResult s = checkMapStability(
       results.final_map.objects, &results.support_plane, config.estimator.gravity, config.physics);

@@ -31,7 +31,8 @@ physics::StabilityResult check(const std::vector<StabilityBody>& bodies,
 
 TEST(Stability, ABoxOnTheTableAndAStackStayPut) {
   const auto b = box(0.10, 0.08, 0.06);
-  const auto result = check({{1, b, at(0, 0, 0.03)}, {2, b, at(0.3, 0, 0.03)}, {3, b, at(0.3, 0, 0.09)}});
+  const auto result =
+      check({{1, b, at(0, 0, 0.03)}, {2, b, at(0.3, 0, 0.03)}, {3, b, at(0.3, 0, 0.09)}});
   ASSERT_EQ(result.bodies.size(), 3u);
   EXPECT_TRUE(result.warnings.empty());
   EXPECT_EQ(result.checked, 3);
@@ -49,8 +50,9 @@ TEST(Stability, AFloatingBoxFallsItsGapAndATiltedSlabTopples) {
   // The slab stands on one bottom edge, 25 degrees from upright: it falls over.
   const Eigen::Matrix3d tilt = rot(25, Eigen::Vector3d::UnitY());
   const Eigen::Vector3d edge = tilt * Eigen::Vector3d(0.01, 0, -0.10);
-  const auto result = check({{1, b, at(0, 0, 0.03 + 0.02)},
-                             {2, slab, at(0.4, 0, 0) * Eigen::Translation3d(-edge) * Eigen::Isometry3d(tilt)}});
+  const auto result =
+      check({{1, b, at(0, 0, 0.03 + 0.02)},
+             {2, slab, at(0.4, 0, 0) * Eigen::Translation3d(-edge) * Eigen::Isometry3d(tilt)}});
   const auto* floating = result.find(1);
   const auto* toppling = result.find(2);
   ASSERT_TRUE(floating && toppling);
@@ -68,7 +70,8 @@ TEST(Stability, AFloatingBoxFallsItsGapAndATiltedSlabTopples) {
 TEST(Stability, InterpenetratingObjectsAreReportedApart) {
   const auto b = box(0.10, 0.08, 0.06);
   // Side by side on the table, 5 mm into each other; a third box away from them.
-  const auto result = check({{1, b, at(0, 0, 0.03)}, {2, b, at(0.095, 0, 0.03)}, {3, b, at(0.5, 0, 0.03)}});
+  const auto result =
+      check({{1, b, at(0, 0, 0.03)}, {2, b, at(0.095, 0, 0.03)}, {3, b, at(0.5, 0, 0.03)}});
   ASSERT_EQ(result.bodies.size(), 3u);
   EXPECT_TRUE(result.bodies[0].interpenetrating);
   EXPECT_TRUE(result.bodies[1].interpenetrating);
@@ -93,7 +96,8 @@ TEST(Stability, BadInputIsNamedAndTheRestStillChecked) {
   nan_pose(0, 3) = std::numeric_limits<double>::quiet_NaN();
   StabilityConfig bad;
   bad.density_kg_m3 = -1.0;
-  const auto result = check({{1, b, at(0, 0, 0.03)}, {2, empty, at(0.2, 0, 0.03)}, {3, b, nan_pose}}, bad);
+  const auto result =
+      check({{1, b, at(0, 0, 0.03)}, {2, empty, at(0.2, 0, 0.03)}, {3, b, nan_pose}}, bad);
   ASSERT_EQ(result.bodies.size(), 3u);
   EXPECT_TRUE(test::anyMentions(result.warnings, "physics.density_kg_m3"));
   EXPECT_TRUE(test::anyMentions(result.warnings, "no_mesh"));
@@ -102,8 +106,8 @@ TEST(Stability, BadInputIsNamedAndTheRestStillChecked) {
   EXPECT_EQ(result.simulated, 1);
   EXPECT_TRUE(result.bodies[0].stable);
   // No support plane: a floor under the lowest object, said.
-  const auto floor = physics::checkStability({{1, b, at(0, 0, 0.53)}}, nullptr, Eigen::Vector3d(0, 0, -1),
-                                             StabilityConfig());
+  const auto floor = physics::checkStability({{1, b, at(0, 0, 0.53)}}, nullptr,
+                                             Eigen::Vector3d(0, 0, -1), StabilityConfig());
   EXPECT_FALSE(floor.has_plane);
   EXPECT_TRUE(test::anyMentions(floor.warnings, "no support plane"));
   EXPECT_TRUE(floor.bodies[0].stable);
@@ -119,7 +123,9 @@ void expectSettledSceneStands(const ModelSet& models, int objects, unsigned seed
   ClutterScene scene;
   std::string report;
   // The next seed when a settled scene breaks the penetration bound, as the data sets do.
-  for (int tries = 0; !makeClutterScene(models, config, seed, &scene, &report) && tries < 5; ++tries) ++seed;
+  for (int tries = 0; !makeClutterScene(models, config, seed, &scene, &report) && tries < 5;
+       ++tries)
+    ++seed;
   ASSERT_LE(scene.max_penetration_m, config.max_penetration_m) << report;
   std::vector<StabilityBody> bodies;
   for (std::size_t i = 0; i < scene.objects.size(); ++i)
@@ -137,9 +143,10 @@ void expectSettledSceneStands(const ModelSet& models, int objects, unsigned seed
       std::cout << "[ stability ] " << scene.objects[m.id].model->name << " #" << m.id << " moves "
                 << 1000 * m.translation_m << " mm, " << m.rotation_deg << " deg\n";
   }
-  std::cout << "[ stability ] " << models.name() << " seed " << seed << ": " << result.stable << " of "
-            << result.checked << " stable, " << 1000 * result.mean_translation_m << " mm mean, "
-            << 1000 * result.max_translation_m << " mm max, " << result.max_rotation_deg << " deg max\n";
+  std::cout << "[ stability ] " << models.name() << " seed " << seed << ": " << result.stable
+            << " of " << result.checked << " stable, " << 1000 * result.mean_translation_m
+            << " mm mean, " << 1000 * result.max_translation_m << " mm max, "
+            << result.max_rotation_deg << " deg max\n";
 }
 
 TEST(Stability, SettledPrimitiveClutterStands) {

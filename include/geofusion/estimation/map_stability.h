@@ -12,7 +12,8 @@ namespace geofusion {
 /// The objects under `gravity` on `plane` (invalid or null: a floor under the lowest object, said
 /// in the result's warnings).
 physics::StabilityResult checkMapStability(const std::vector<ObjectEstimate>& objects,
-                                           const SupportPlane* plane, const Eigen::Vector3d& gravity,
+                                           const SupportPlane* plane,
+                                           const Eigen::Vector3d& gravity,
                                            const physics::StabilityConfig& config);
 
 }  // namespace geofusion

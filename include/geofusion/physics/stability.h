@@ -22,16 +22,16 @@ struct StabilityConfig {
   /// settles its scenes with and the evaluation's interpenetration measures); true, its convex
   /// parts (ObjectModel::collision_parts: a bowl's hollow, a drill's handle).
   bool convex_parts = false;
-  double duration_s = 1.0;             ///< simulated time under gravity
-  double time_step_s = 1.0 / 240.0;    ///< Bullet's fixed step
-  double density_kg_m3 = 600.0;        ///< one density for every object: mass = density x volume
-  double friction = 0.7;               ///< Coulomb friction of objects and the support plane
-  double rolling_friction = 0.002;     ///< rolling and spinning friction (as the generator's settling)
-  double linear_damping = 0.2;         ///< Bullet's velocity damping (as the generator's settling)
+  double duration_s = 1.0;           ///< simulated time under gravity
+  double time_step_s = 1.0 / 240.0;  ///< Bullet's fixed step
+  double density_kg_m3 = 600.0;      ///< one density for every object: mass = density x volume
+  double friction = 0.7;             ///< Coulomb friction of objects and the support plane
+  double rolling_friction = 0.002;  ///< rolling and spinning friction (as the generator's settling)
+  double linear_damping = 0.2;      ///< Bullet's velocity damping (as the generator's settling)
   double angular_damping = 0.4;
-  double gravity_m_s2 = 9.81;          ///< along the map's gravity direction
-  double stable_translation_m = 0.005; ///< stable: the centre of mass moves less than this ...
-  double stable_rotation_deg = 3.0;    ///< ... and the object turns less than this
+  double gravity_m_s2 = 9.81;           ///< along the map's gravity direction
+  double stable_translation_m = 0.005;  ///< stable: the centre of mass moves less than this ...
+  double stable_rotation_deg = 3.0;     ///< ... and the object turns less than this
   /// Objects deeper than this into another object or the plane at the start are reported apart:
   /// the simulator's push-out is not gravity.
   double start_penetration_m = 0.001;
@@ -59,14 +59,14 @@ struct StabilityPlane {
 /// What happened to one object.
 struct BodyMotion {
   int id = -1;
-  bool simulated = false;        ///< false: no collision shape (see `problem`)
-  std::string problem;           ///< why it was not simulated, empty when it was
-  double translation_m = 0.0;    ///< of its centre of mass, over the simulated time
-  double rotation_deg = 0.0;     ///< angle of its rotation over the simulated time
+  bool simulated = false;            ///< false: no collision shape (see `problem`)
+  std::string problem;               ///< why it was not simulated, empty when it was
+  double translation_m = 0.0;        ///< of its centre of mass, over the simulated time
+  double rotation_deg = 0.0;         ///< angle of its rotation over the simulated time
   double start_penetration_m = 0.0;  ///< deepest into another object or the plane at the start
-  int penetrating_id = -1;       ///< the object it starts deepest in (kPlaneId: the plane), or -1
-  bool interpenetrating = false; ///< start_penetration_m above the setting: reported apart
-  bool stable = false;           ///< simulated, not interpenetrating, below both bounds
+  int penetrating_id = -1;        ///< the object it starts deepest in (kPlaneId: the plane), or -1
+  bool interpenetrating = false;  ///< start_penetration_m above the setting: reported apart
+  bool stable = false;            ///< simulated, not interpenetrating, below both bounds
 };
 
 constexpr int kPlaneId = -2;
@@ -96,8 +96,9 @@ struct StabilityResult {
 /// Puts the bodies on the plane (a static slab whose top face is the plane; none given: a floor
 /// under the lowest object, with a warning), gravity along `gravity` (normalised here; zero:
 /// -plane normal), steps for `duration_s` and reports each body's motion.
-StabilityResult checkStability(const std::vector<StabilityBody>& bodies, const StabilityPlane* plane,
-                               const Eigen::Vector3d& gravity, const StabilityConfig& config);
+StabilityResult checkStability(const std::vector<StabilityBody>& bodies,
+                               const StabilityPlane* plane, const Eigen::Vector3d& gravity,
+                               const StabilityConfig& config);
 
 }  // namespace physics
 }  // namespace geofusion
