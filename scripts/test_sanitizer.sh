@@ -18,10 +18,27 @@
 #     puts them in LD_PRELOAD for the nodelet processes only (Python and the other uninstrumented
 #     ROS tools are left as they are).
 # Usage: scripts/test_sanitizer.sh address|thread [ctest arguments, e.g. -R test_core]
+#   (builds the committed HEAD from a worktree, see below)
 set -euo pipefail
 mode="${1:-}"
 shift || true
 root="${XDG_CACHE_HOME:-$HOME/.cache}/geofusion"
+# The build reads a fixed copy of the source: a git worktree of HEAD in $root/src-<mode>
+# (uncommitted changes are not tested). Building the live tree through the workspace's symlink
+# let edits made during the 40-minute build mix two versions of a header into one run.
+if [ "${GEOFUSION_SANITIZER_SNAPSHOT:-0}" != 1 ] && [ -n "$mode" ]; then
+  here="$(cd "$(dirname "$0")/.." && pwd)"
+  snapshot="$root/src-$mode"
+  commit=$(git -C "$here" rev-parse HEAD)
+  if [ -e "$snapshot/.git" ]; then
+    git -C "$snapshot" checkout --quiet --detach "$commit"
+  else
+    git -C "$here" worktree prune
+    git -C "$here" worktree add --quiet --detach "$snapshot" "$commit"
+  fi
+  echo "[geofusion] sanitizer build of commit $commit from the worktree $snapshot"
+  GEOFUSION_SANITIZER_SNAPSHOT=1 exec bash "$snapshot/scripts/test_sanitizer.sh" "$mode" "$@"
+fi
 case "$mode" in
   address) export GEOFUSION_WS="${GEOFUSION_ASAN_WS:-$root/ws-asan}" ;;
   thread) export GEOFUSION_WS="${GEOFUSION_TSAN_WS:-$root/ws-tsan}" ;;
