@@ -216,7 +216,11 @@ run_ctest "$( [ -d /ws/.catkin_tools ] && echo 'catkin build' || echo catkin_mak
 if [ "$REUSE_BUILD" != 1 ] && [ "$status" -eq 0 ] && [ -z "$CTEST_ARGS" ]; then
   # catkin build on the same sources. catkin_make's spaces are removed first, so that catkin
   # build's build/geofusion and merged devel space have the very paths catkin_make's had and the
-  # compiler cache serves it; the environment is the one before any setup.bash.
+  # compiler cache serves it; the environment is the one before any setup.bash. The second build
+  # configures again (--force-cmake), as catkin_make's second run does: catkin's cached test
+  # environment (env_cached.sh) is written at configure time and only lists devel folders that
+  # exist then, so the first configure's has no Python path and the rostests' checkers cannot
+  # import geofusion.msg.
   rm -rf /ws/build /ws/devel /ws/install
   start=$(date +%s)
   env -i "${clean_env[@]}" bash -c '
@@ -224,7 +228,7 @@ if [ "$REUSE_BUILD" != 1 ] && [ "$status" -eq 0 ] && [ -z "$CTEST_ARGS" ]; then
     cd /ws && catkin init >/dev/null
     catkin config --merge-devel --cmake-args "$@" >/dev/null
     catkin build --no-status --summarize -j2
-    catkin build --no-status --summarize -j2 --make-args tests' catkin-build "${args[@]}"
+    catkin build --no-status --summarize -j2 --force-cmake --make-args tests' catkin-build "${args[@]}"
   echo "[geofusion] $RELEASE: catkin build took $(( $(date +%s) - start )) s"
   run_ctest "catkin build" -R "$CATKIN_TOOLS_TESTS" || status=$?
 fi
