@@ -1,0 +1,64 @@
+// The support graph as a plan (issue 50): per object what supports it, what it supports, what it
+// leans on and what stands beside it, whether it stands, whether it is free to pick (nothing
+// rests or leans on it), and a removal order (top first: a topological order of the "rests or
+// leans on" graph, ties broken by what the robot sees best). Built from the map's contacts; one
+// implementation for run_offline's results, the Python API, the ROS service and the benchmark's
+// ground truth.
+#pragma once
+
+#include "geofusion/estimation/contacts.h"
+
+#include <Eigen/Core>
+
+#include <string>
+#include <vector>
+
+namespace geofusion {
+
+/// One object the graph is built over.
+struct SceneGraphObject {
+  int id = -1;  ///< the map's object id (>= 0; the support plane is kSupportPlaneId)
+  std::string class_name;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();  ///< map frame: the height tie-break
+  /// How well the robot sees it (the map's existence score): the removal order's tie-break.
+  double visibility = 0.0;
+  /// -1: not checked; 0 / 1: the stability check moved it / left it standing.
+  int stable = -1;
+};
+
+struct SceneGraphNode {
+  int id = -1;
+  std::string class_name;
+  /// Ids; SceneGraph::kSupportPlaneId (-1) is the support plane (the table; messages: 0).
+  std::vector<int> supported_by, supports;
+  std::vector<int> leans_on, leaned_on_by;
+  std::vector<int> beside;  ///< side-by-side contacts
+  int stable = -1;          ///< as SceneGraphObject::stable
+  /// Nothing rests or leans on it: taking it disturbs no other object.
+  bool free_to_pick = true;
+  int removal_step = -1;  ///< its place in SceneGraph::removal_order (0 first)
+};
+
+struct SceneGraph {
+  static constexpr int kSupportPlaneId = -1;
+  std::vector<SceneGraphNode> nodes;  ///< in the order of the objects given
+  std::vector<int> removal_order;     ///< object ids, the first to take first
+  /// Cycles of "rests or leans on" (two estimates each on the other): broken by taking the
+  /// highest object of the cycle first, each one said here.
+  std::vector<std::string> warnings;
+  /// The node of an object id, or null.
+  const SceneGraphNode* find(int id) const;
+};
+
+/// The graph of `objects` from `contacts` (object_a / object_b index `objects`, -1 the support
+/// plane). A support contact: a supports b. A leaning contact: the object above (along
+/// -gravity, by the contact normal; by the centres when the normal is level) leans on the other.
+/// A side contact: beside each other. Contacts naming an object outside the list are skipped.
+SceneGraph buildSceneGraph(const std::vector<SceneGraphObject>& objects,
+                           const std::vector<FeatureContact>& contacts,
+                           const Eigen::Vector3d& gravity);
+
+/// "class #id" of an object of the graph ("table" for the support plane, "#id" when unknown).
+std::string sceneGraphName(const SceneGraph& graph, int id);
+
+}  // namespace geofusion

@@ -1,0 +1,136 @@
+#include "geofusion/estimation/scene_graph.h"
+
+#include <algorithm>
+#include <map>
+#include <set>
+
+namespace geofusion {
+
+namespace {
+
+void addOnce(std::vector<int>* list, int id) {
+  if (std::find(list->begin(), list->end(), id) == list->end()) list->push_back(id);
+}
+
+// Below this |normal . up| a leaning contact's normal is level and the centres say which object
+// is above.
+constexpr double kLevelNormal = 0.05;
+
+// One contact into the nodes' relations (indices into `objects`, -1 the plane).
+void addRelation(const std::vector<SceneGraphObject>& objects, const FeatureContact& c,
+                 const Eigen::Vector3d& up, std::vector<SceneGraphNode>* nodes) {
+  const int n = static_cast<int>(objects.size());
+  if (c.object_a >= n || c.object_b >= n || c.object_a < -1 || c.object_b < -1 ||
+      c.object_a == c.object_b || (c.object_a < 0 && c.object_b < 0))
+    return;
+  auto idOf = [&](int i) { return i < 0 ? SceneGraph::kSupportPlaneId : objects[i].id; };
+  auto node = [&](int i) { return i < 0 ? nullptr : &(*nodes)[static_cast<std::size_t>(i)]; };
+  int lower = c.object_a, upper = c.object_b;  // a support contact: a supports b
+  if (c.kind == ContactKind::kSide) {
+    if (c.object_a < 0 || c.object_b < 0) return;
+    addOnce(&node(c.object_a)->beside, idOf(c.object_b));
+    addOnce(&node(c.object_b)->beside, idOf(c.object_a));
+    return;
+  }
+  if (c.kind == ContactKind::kLeaning) {
+    const double s = c.normal.dot(up);  // the normal runs from a towards b
+    bool b_above = s > 0.0;
+    if (std::abs(s) < kLevelNormal) {
+      const double ha = c.object_a < 0 ? -1e9 : objects[c.object_a].centre.dot(up);
+      const double hb = c.object_b < 0 ? -1e9 : objects[c.object_b].centre.dot(up);
+      b_above = hb >= ha;
+    }
+    if (!b_above) std::swap(lower, upper);
+    if (upper < 0) return;  // the plane leaning on an object: not a relation a plan uses
+    addOnce(&node(upper)->leans_on, idOf(lower));
+    if (lower >= 0) addOnce(&node(lower)->leaned_on_by, idOf(upper));
+    return;
+  }
+  if (upper < 0) return;
+  addOnce(&node(upper)->supported_by, idOf(lower));
+  if (lower >= 0) addOnce(&node(lower)->supports, idOf(upper));
+}
+
+// Whether object i goes before j among those free to take: seen better, then higher, then the
+// lower id.
+bool takenBefore(const SceneGraphObject& i, const SceneGraphObject& j, const Eigen::Vector3d& up) {
+  if (i.visibility != j.visibility) return i.visibility > j.visibility;
+  const double hi = i.centre.dot(up), hj = j.centre.dot(up);
+  if (hi != hj) return hi > hj;
+  return i.id < j.id;
+}
+
+// The removal order: repeatedly the best-seen object that nothing left rests or leans on; in a
+// cycle, the highest object left.
+void orderRemovals(const std::vector<SceneGraphObject>& objects, const Eigen::Vector3d& up,
+                   SceneGraph* graph) {
+  std::map<int, int> index_of;
+  for (std::size_t i = 0; i < objects.size(); ++i) index_of[objects[i].id] = static_cast<int>(i);
+  std::vector<bool> taken(objects.size(), false);
+  auto blocked = [&](std::size_t i) {
+    const SceneGraphNode& n = graph->nodes[i];
+    for (const std::vector<int>* on : {&n.supports, &n.leaned_on_by})
+      for (int id : *on)
+        if (!taken[static_cast<std::size_t>(index_of.at(id))]) return true;
+    return false;
+  };
+  for (std::size_t step = 0; step < objects.size(); ++step) {
+    int best = -1;
+    for (std::size_t i = 0; i < objects.size(); ++i) {
+      if (taken[i] || blocked(i)) continue;
+      if (best < 0 || takenBefore(objects[i], objects[static_cast<std::size_t>(best)], up))
+        best = static_cast<int>(i);
+    }
+    if (best < 0) {  // a cycle: the highest object left
+      for (std::size_t i = 0; i < objects.size(); ++i) {
+        if (taken[i]) continue;
+        if (best < 0 ||
+            objects[i].centre.dot(up) > objects[static_cast<std::size_t>(best)].centre.dot(up))
+          best = static_cast<int>(i);
+      }
+      graph->warnings.push_back("objects rest or lean on each other in a cycle: " +
+                                sceneGraphName(*graph, objects[static_cast<std::size_t>(best)].id) +
+                                ", the highest of them, is taken first");
+    }
+    taken[static_cast<std::size_t>(best)] = true;
+    graph->nodes[static_cast<std::size_t>(best)].removal_step = static_cast<int>(step);
+    graph->removal_order.push_back(objects[static_cast<std::size_t>(best)].id);
+  }
+}
+
+}  // namespace
+
+const SceneGraphNode* SceneGraph::find(int id) const {
+  for (const SceneGraphNode& n : nodes)
+    if (n.id == id) return &n;
+  return nullptr;
+}
+
+std::string sceneGraphName(const SceneGraph& graph, int id) {
+  if (id == SceneGraph::kSupportPlaneId) return "table";
+  const SceneGraphNode* n = graph.find(id);
+  return (n && !n->class_name.empty() ? n->class_name + " " : std::string()) + "#" +
+         std::to_string(id);
+}
+
+SceneGraph buildSceneGraph(const std::vector<SceneGraphObject>& objects,
+                           const std::vector<FeatureContact>& contacts,
+                           const Eigen::Vector3d& gravity) {
+  SceneGraph graph;
+  const Eigen::Vector3d up =
+      gravity.norm() > 0.0 ? Eigen::Vector3d(-gravity.normalized()) : Eigen::Vector3d::UnitZ();
+  for (const SceneGraphObject& o : objects) {
+    SceneGraphNode node;
+    node.id = o.id;
+    node.class_name = o.class_name;
+    node.stable = o.stable;
+    graph.nodes.push_back(node);
+  }
+  for (const FeatureContact& c : contacts) addRelation(objects, c, up, &graph.nodes);
+  for (SceneGraphNode& n : graph.nodes)
+    n.free_to_pick = n.supports.empty() && n.leaned_on_by.empty();
+  orderRemovals(objects, up, &graph);
+  return graph;
+}
+
+}  // namespace geofusion
