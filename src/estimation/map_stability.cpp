@@ -14,4 +14,28 @@ physics::StabilityResult checkMapStability(const std::vector<ObjectEstimate>& ob
   return physics::checkStability(bodies, &support, gravity, config);
 }
 
+SceneGraph mapSceneGraph(const std::vector<ObjectEstimate>& objects,
+                         const std::vector<FeatureContact>& contacts,
+                         const Eigen::Vector3d& gravity,
+                         const physics::StabilityResult* stability) {
+  std::vector<SceneGraphObject> list;
+  list.reserve(objects.size());
+  for (const ObjectEstimate& o : objects) {
+    SceneGraphObject g;
+    g.id = o.id;
+    g.visibility = o.existence;
+    g.centre = o.T_map_obj.translation();
+    if (o.model) {
+      g.class_name = o.model->name;
+      g.centre = o.T_map_obj * boxOf(*o.model).center().cast<double>();
+    }
+    if (stability) {
+      const physics::BodyMotion* m = stability->find(o.id);
+      if (m && m->simulated) g.stable = m->stable ? 1 : 0;
+    }
+    list.push_back(std::move(g));
+  }
+  return buildSceneGraph(list, contacts, gravity);
+}
+
 }  // namespace geofusion

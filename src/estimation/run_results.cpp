@@ -53,6 +53,31 @@ void emitContacts(YAML::Emitter& out, const KeyframeResult& r) {
   out << YAML::EndSeq;
 }
 
+// The final map's scene graph: the removal order, then per object its relations (ids, -1 the
+// support plane), whether it stands (-1: not checked) and whether it is free to pick.
+void emitSceneGraph(YAML::Emitter& out, const SceneGraph& g) {
+  out << YAML::Key << "scene_graph" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "removal_order" << YAML::Value << YAML::Flow << g.removal_order;
+  out << YAML::Key << "objects" << YAML::Value << YAML::BeginSeq;
+  for (const SceneGraphNode& n : g.nodes) {
+    out << YAML::Flow << YAML::BeginMap;
+    out << YAML::Key << "id" << YAML::Value << n.id;
+    out << YAML::Key << "class" << YAML::Value << n.class_name;
+    out << YAML::Key << "supported_by" << YAML::Value << YAML::Flow << n.supported_by;
+    out << YAML::Key << "supports" << YAML::Value << YAML::Flow << n.supports;
+    out << YAML::Key << "leans_on" << YAML::Value << YAML::Flow << n.leans_on;
+    out << YAML::Key << "leaned_on_by" << YAML::Value << YAML::Flow << n.leaned_on_by;
+    out << YAML::Key << "beside" << YAML::Value << YAML::Flow << n.beside;
+    out << YAML::Key << "stable" << YAML::Value << n.stable;
+    out << YAML::Key << "free_to_pick" << YAML::Value << n.free_to_pick;
+    out << YAML::Key << "removal_step" << YAML::Value << n.removal_step;
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+  out << YAML::Key << "warnings" << YAML::Value << YAML::Flow << g.warnings;
+  out << YAML::EndMap;
+}
+
 // The keyframe's relocalisation: whether it searched, what it decided, the correction found, its
 // support, the runner-up's, and the odometry drift it was judged against (issue 32).
 void emitRelocalisation(YAML::Emitter& out, const Relocalisation& r) {
@@ -312,6 +337,7 @@ bool writeRunResults(const std::string& path, const RunResults& r, std::string* 
   emitStages(out, r.final_map);
   emitObjects(out, r.final_map.objects, r.final_map.T_map_cam);
   emitContacts(out, r.final_map);
+  if (r.has_scene_graph) emitSceneGraph(out, r.scene_graph);
   if (r.support_plane.valid) {
     const Eigen::Vector3d& n = r.support_plane.normal;
     out << YAML::Key << "support_plane" << YAML::Value << YAML::Flow << YAML::BeginMap;

@@ -565,6 +565,69 @@ void evaluateStability(const GroundTruth& gt, const RunResults& results, const M
   ev->has_stability = true;
 }
 
+// The true scene's support graph at the end (objects taken away keep no relation).
+SceneGraph trueSceneGraph(const GroundTruth& gt) {
+  std::vector<SceneGraphObject> objects;
+  for (std::size_t i = 0; i < gt.scene.objects.size(); ++i) {
+    const SceneObject& o = gt.scene.objects[i];
+    SceneGraphObject g;
+    g.id = static_cast<int>(i);
+    g.class_name = o.model->name;
+    g.centre = o.T_world_obj * boxOf(*o.model).center().cast<double>();
+    objects.push_back(std::move(g));
+  }
+  std::vector<FeatureContact> contacts;
+  for (const FeatureContact& c : gt.scene.contacts)
+    if (bothThereAtTheEnd(gt.scene, c)) contacts.push_back(c);
+  return buildSceneGraph(objects, contacts, -Eigen::Vector3d::UnitZ());
+}
+
+// The map's removal order against the true support graph (issue 50): each step that takes a true
+// object is unsafe when a true object still there, which the map also has, rests or leans on it;
+// "free to pick" against the truth's.
+void evaluateSceneGraph(const GroundTruth& gt, const RunResults& results, const MapScore& score,
+                        RunEvaluation* ev) {
+  const std::vector<ObjectEstimate>& map = results.final_map.objects;
+  const Plane table = tableOf(gt, results, *ev);
+  ev->scene_graph = mapSceneGraph(map, results.final_map.contacts, -table.n,
+                                  ev->has_stability ? &ev->stability : nullptr);
+  const SceneGraph truth = trueSceneGraph(gt);
+  std::map<int, int> truth_of_id;  // map id -> true index
+  for (std::size_t i = 0; i < map.size() && i < score.match.size(); ++i)
+    if (score.match[i] >= 0) truth_of_id[map[i].id] = score.match[i];
+  std::set<int> in_map, taken;
+  for (const auto& [id, t] : truth_of_id) in_map.insert(t);
+  for (int id : ev->scene_graph.removal_order) {
+    const auto it = truth_of_id.find(id);
+    if (it == truth_of_id.end()) continue;  // a false object: nothing true is moved
+    const SceneGraphNode& node = truth.nodes[static_cast<std::size_t>(it->second)];
+    int above_in_map = -1;
+    bool above_missed = false;
+    for (const std::vector<int>* on : {&node.supports, &node.leaned_on_by})
+      for (int above : *on) {
+        if (taken.count(above)) continue;
+        if (in_map.count(above))
+          above_in_map = above;
+        else
+          above_missed = true;
+      }
+    ++ev->plan_steps;
+    ev->plan_unsafe_steps += above_in_map >= 0;
+    ev->plan_steps_under_missed += above_in_map < 0 && above_missed;
+    if (above_in_map >= 0 && ev->first_unsafe_step.empty())
+      ev->first_unsafe_step = "took " + sceneGraphName(ev->scene_graph, id) + " (true) before " +
+                              sceneGraphName(truth, above_in_map) +
+                              " (true) resting or leaning on it";
+    taken.insert(it->second);
+    const SceneGraphNode* estimated = ev->scene_graph.find(id);
+    ev->free_predicted += estimated && estimated->free_to_pick;
+    ev->free_correct += estimated && estimated->free_to_pick && node.free_to_pick;
+    ev->free_true += node.free_to_pick;
+  }
+  for (const std::string& w : ev->scene_graph.warnings) ev->warnings.push_back("scene graph: " + w);
+  ev->has_scene_graph = true;
+}
+
 // Which true objects are in keyframe `k`'s map: an estimate of the class within the match
 // distance, in the truth's frame (the final trajectory alignment).
 std::vector<bool> mappedObjects(const GroundTruth& gt, const KeyframeResult& k,
@@ -693,6 +756,7 @@ bool evaluateRun(const GroundTruth& gt, const RunResults& results, const Evaluat
   evaluateDetectorErrors(gt, results.final_map.objects, score, config, &ev);
   evaluatePlausibility(gt, results, score, config, &ev);
   evaluateStability(gt, results, score, &ev);
+  evaluateSceneGraph(gt, results, score, &ev);
   evaluateLifecycle(gt, results, frames, score, config, &ev);
   *evaluation = std::move(ev);
   return true;
@@ -724,6 +788,22 @@ nlohmann::json stabilityResultJson(const physics::StabilityResult& r) {
           {"least_stable_pair", {r.least_stable_pair.first, r.least_stable_pair.second}},
           {"least_stable_pair_mm", 1000 * r.least_stable_pair_m},
           {"bodies", bodies}};
+}
+
+// The plan's block: its removal order (map ids) and how it fares against the true support graph.
+nlohmann::json sceneGraphJson(const RunEvaluation& e) {
+  nlohmann::json free = {
+      {"predicted", e.free_predicted}, {"correct", e.free_correct}, {"true", e.free_true}};
+  free["precision"] = e.free_predicted > 0
+                          ? nlohmann::json(double(e.free_correct) / e.free_predicted)
+                          : nlohmann::json(nullptr);
+  return {{"removal_order", e.scene_graph.removal_order},
+          {"true_steps", e.plan_steps},
+          {"unsafe_steps", e.plan_unsafe_steps},
+          {"steps_under_missed_objects", e.plan_steps_under_missed},
+          {"first_unsafe_step", e.first_unsafe_step},
+          {"free_to_pick", free},
+          {"warnings", e.scene_graph.warnings}};
 }
 
 // The stability block: the settings, the map's check, its true objects, the truth's check.
@@ -992,6 +1072,7 @@ bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::s
                     {"deepest_pair", e.deepest_pair},
                     {"widest_gap_pair", e.widest_gap_pair}};
   if (e.has_stability) j["stability"] = stabilityJson(e);
+  if (e.has_scene_graph) j["scene_graph"] = sceneGraphJson(e);
   j["lifecycle"] = lifecycleJson(e);
   j["trajectory"] = {{"ate_rmse_m", e.alignment_rmse_m},
                      {"odometry_ate_rmse_m", e.odometry_ate_rmse_m}};
@@ -1078,6 +1159,15 @@ std::string summarize(const RunEvaluation& e) {
     if (!e.least_stable_pair.empty())
       s << "    least stable pair: " << e.least_stable_pair << " ("
         << std::lround(10000 * m.least_stable_pair_m) / 10.0 << " mm apart after it)\n";
+  }
+  if (e.has_scene_graph) {
+    std::snprintf(line, sizeof(line),
+                  "  plan: %d of %d steps taking a true object unsafe (%d more under a missed "
+                  "object); free to pick: %d of %d right (%d free in the truth)\n",
+                  e.plan_unsafe_steps, e.plan_steps, e.plan_steps_under_missed, e.free_correct,
+                  e.free_predicted, e.free_true);
+    s << line;
+    if (!e.first_unsafe_step.empty()) s << "    first unsafe step: " << e.first_unsafe_step << "\n";
   }
   // The mean carries the solves made only every N-th keyframe (B-SLAM's stage I), which the
   // median does not see.

@@ -124,6 +124,7 @@ class PyEstimator {
       kf.detections.push_back(w.measurement);
     KeyframeResult result = estimator_->addKeyframe(kf);
     py::dict out = keyframeDict(result);
+    contacts_ = result.contacts;
     record_.keyframes.push_back(std::move(result));  // for bop_results
     last_K_ = kf.K;
     out["skipped_detections"] =
@@ -134,6 +135,7 @@ class PyEstimator {
   py::dict finish() {
     const KeyframeResult r = estimator_->finish();
     py::dict out = keyframeDict(r);
+    contacts_ = r.contacts;
     out["trajectory"] = poses(estimator_->trajectory());
     out["stamps"] = estimator_->keyframeStamps();
     const SupportPlane& plane = estimator_->supportPlane();
@@ -183,6 +185,27 @@ class PyEstimator {
                     py::arg("warnings") = r.warnings);
   }
 
+  // The map so far as a plan (scene_graph.h): per object its relations, whether it stands (the
+  // stability check above) and whether it is free to pick, and the removal order.
+  py::dict sceneGraph() const {
+    const SupportPlane& plane = estimator_->supportPlane();
+    const physics::StabilityResult stability = checkMapStability(
+        estimator_->objects(), &plane, config_.estimator.gravity, config_.physics);
+    const SceneGraph g =
+        mapSceneGraph(estimator_->objects(), contacts_, config_.estimator.gravity, &stability);
+    py::list nodes;
+    for (const SceneGraphNode& n : g.nodes)
+      nodes.append(py::dict(
+          py::arg("id") = n.id, py::arg("class_name") = n.class_name,
+          py::arg("supported_by") = n.supported_by, py::arg("supports") = n.supports,
+          py::arg("leans_on") = n.leans_on, py::arg("leaned_on_by") = n.leaned_on_by,
+          py::arg("beside") = n.beside,
+          py::arg("stable") = n.stable < 0 ? py::object(py::none()) : py::bool_(n.stable == 1),
+          py::arg("free_to_pick") = n.free_to_pick, py::arg("removal_step") = n.removal_step));
+    return py::dict(py::arg("objects") = nodes, py::arg("removal_order") = g.removal_order,
+                    py::arg("warnings") = g.warnings);
+  }
+
   py::list objects() const { return objectList(estimator_->objects()); }
   py::array trajectory() const { return poses(estimator_->trajectory()); }
   int numKeyframes() const { return estimator_->numKeyframes(); }
@@ -193,7 +216,8 @@ class PyEstimator {
   GeoFusionConfig config_;
   FrameByFrame checker_;
   std::unique_ptr<SceneEstimator> estimator_;
-  RunResults record_;  ///< every keyframe's result (bop_results)
+  RunResults record_;                     ///< every keyframe's result (bop_results)
+  std::vector<FeatureContact> contacts_;  ///< of the latest map (addKeyframe or finish)
   PinholeIntrinsics last_K_;
 };
 
@@ -313,6 +337,10 @@ void bindModule(py::module_& m) {
       .def("stability", &PyEstimator::stability,
            "The map so far under gravity on its support plane (Bullet, the configuration's "
            "physics settings): per object its motion and whether it is stable (docs/stability.md).")
+      .def("scene_graph", &PyEstimator::sceneGraph,
+           "The map so far as a plan: per object what supports it, what it supports, what it "
+           "leans on and stands beside, whether it is stable and free to pick, and the removal "
+           "order, top first (docs/scene_graph.md).")
       .def("bop_results", &PyEstimator::bopResults, py::arg("path") = py::none(),
            py::arg("scene_id") = 0,
            "Every keyframe's map objects in view as BOP results (CSV text, docs/results.md); "

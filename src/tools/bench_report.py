@@ -497,6 +497,32 @@ def physics_metrics(evals):
             'physics_pairs': int(pen.size)}
 
 
+def plan_metrics(evals):
+    """The support graph as a plan (evaluation's 'scene_graph'): unsafe removal steps per scene
+    (a true object taken while a true object the map has still rests or leans on it), the steps
+    under objects the map missed, and the precision of "free to pick". None where no file has
+    it."""
+    blocks = [(ev.get('scene'), ev['scene_graph']) for ev in evals if ev.get('scene_graph')]
+    if not blocks:
+        return {'plan_scenes': None}
+    predicted = sum(b['free_to_pick']['predicted'] for _, b in blocks)
+    correct = sum(b['free_to_pick']['correct'] for _, b in blocks)
+    unsafe = [b['unsafe_steps'] for _, b in blocks]
+    first = next(('%s: %s' % (scene, b['first_unsafe_step']) for scene, b in blocks
+                  if b['first_unsafe_step']), None)
+    return {'plan_scenes': len(blocks),
+            'plan_steps': sum(b['true_steps'] for _, b in blocks),
+            'plan_unsafe_steps': int(sum(unsafe)),
+            'plan_unsafe_per_scene': float(np.mean(unsafe)),
+            'plan_unsafe_max_scene': int(max(unsafe)),
+            'plan_steps_under_missed': sum(b['steps_under_missed_objects'] for _, b in blocks),
+            'plan_first_unsafe': first,
+            'free_predicted': predicted,
+            'free_correct': correct,
+            'free_precision': _ratio(correct, predicted),
+            'free_true': sum(b['free_to_pick']['true'] for _, b in blocks)}
+
+
 def stability_metrics(evals):
     """Physical stability (Bullet, evaluation's 'stability'): the share of the final maps' true
     objects that stay put, the checked objects' motion, the least stable pair, and the ground
@@ -645,6 +671,7 @@ def method_summary(evals):
     out.update(contact_metrics(evals))
     out.update(physics_metrics(evals))
     out.update(stability_metrics(evals))
+    out.update(plan_metrics(evals))
     out.update(timing_metrics(evals))
     out.update(final_map_figures(evals))
     out.update(lifecycle_figures(evals))
@@ -753,7 +780,19 @@ def check_targets(methods, suite=None):
     else:
         _paper_suite_targets(methods, add)
     _stability_targets(methods, add, suite)
+    _plan_targets(methods, add, suite)
     return rows
+
+
+def _plan_targets(methods, add, suite=None):
+    """Issue 50: no unsafe removal step for true objects on bench and bench_rgb."""
+    ours = methods.get(OURS) or {}
+    if ours.get('plan_scenes') is None or suite not in PERSISTENT_SUITES:
+        return
+    add('plan: %s 0 unsafe removal steps of true objects' % OURS,
+        '%d in %d scenes (max %d in one)' % (ours['plan_unsafe_steps'], ours['plan_scenes'],
+                                             ours['plan_unsafe_max_scene']),
+        ours['plan_unsafe_steps'] == 0, '%d steps' % ours['plan_unsafe_steps'])
 
 
 def _stability_targets(methods, add, suite=None):
@@ -1099,6 +1138,26 @@ def stability_section(methods):
                   rows) + ['']
 
 
+def plan_section(methods):
+    """The plan table: every method's removal order against the true support graph."""
+    have = [(n, m) for n, m in methods.items() if m.get('plan_scenes') is not None]
+    if not have:
+        return []
+    md = ['## The support graph as a plan', '',
+          'Each final map\'s removal order (top first, docs/scene_graph.md) against the true '
+          'support graph: a step is unsafe when it takes a true object while a true object the '
+          'map also has still rests or leans on it; steps under objects the map missed are '
+          'counted apart. "Free to pick": the map\'s true objects it calls free, and of them free '
+          'in the truth. A method without contacts calls every object free.', '']
+    rows = [[n, str(m['plan_steps']), str(m['plan_unsafe_steps']),
+             _num(m['plan_unsafe_per_scene'], 2), str(m['plan_steps_under_missed']),
+             '%d / %d' % (m['free_correct'], m['free_predicted']), _num(m['free_precision'], 3),
+             m['plan_first_unsafe'] or '-'] for n, m in have]
+    return _table(['method', 'steps (true objects)', 'unsafe', 'unsafe per scene',
+                   'under a missed object', 'free right / called free', 'free precision',
+                   'first unsafe step'], rows) + ['']
+
+
 def write_report(summary, out_dir, figures, command):
     """report.md from the summary."""
     methods, scenes = summary['methods'], summary['scenes']
@@ -1211,6 +1270,7 @@ def write_report(summary, out_dir, figures, command):
     md += _table(['method', 'penetration mean (mm)', 'penetration max (mm)', 'gap mean (mm)',
                   'gap max (mm)', 'values'], rows) + ['']
     md += stability_section(methods)
+    md += plan_section(methods)
     rows = [[n, '%d / %d / %d' % (m['final_objects'], m['final_matched'],
                                   m['final_true_objects']),
              _num(None if m['final_adds_mean_m'] is None else 1000 * m['final_adds_mean_m']),

@@ -494,35 +494,55 @@ bool writeOutputs(const Options& opt, geofusion::EstimatorPipeline* pipeline,
   return true;
 }
 
-// The final map under gravity on its support plane (physics/stability.h): would it stand?
-void printStability(const geofusion::GeoFusionConfig& config,
-                    const geofusion::RunResults& results) {
+// The final map under gravity on its support plane (physics/stability.h), and its support graph
+// as a plan with the check's verdicts (scene_graph.h; written with the results).
+geofusion::physics::StabilityResult checkFinalMap(const geofusion::GeoFusionConfig& config,
+                                                  geofusion::RunResults* results) {
   using namespace geofusion;
-  const physics::StabilityResult s = checkMapStability(
-      results.final_map.objects, &results.support_plane, config.estimator.gravity, config.physics);
+  physics::StabilityResult s =
+      checkMapStability(results->final_map.objects, &results->support_plane,
+                        config.estimator.gravity, config.physics);
+  results->scene_graph = mapSceneGraph(results->final_map.objects, results->final_map.contacts,
+                                       config.estimator.gravity, &s);
+  results->has_scene_graph = true;
+  return s;
+}
+
+// Would the final map stand? And what can be taken first?
+void printStability(const geofusion::GeoFusionConfig& config, const geofusion::RunResults& results,
+                    const geofusion::physics::StabilityResult& s) {
+  using namespace geofusion;
+  auto name = [&](int id) {
+    return sceneGraphName(results.scene_graph,
+                          id == physics::kPlaneId ? SceneGraph::kSupportPlaneId : id);
+  };
   std::printf(
       "run_offline: stability (%.1f s of gravity): %d of %d objects stable, %d more start "
       "interpenetrating; motion %.1f mm mean, %.1f mm / %.1f deg max",
       config.physics.duration_s, s.stable, s.checked, s.interpenetrating,
       1000 * s.mean_translation_m, 1000 * s.max_translation_m, s.max_rotation_deg);
   if (s.least_stable_pair.first != -1) {
-    auto name = [&](int id) {
-      if (id == physics::kPlaneId) return std::string("table");
-      for (const ObjectEstimate& o : results.final_map.objects)
-        if (o.id == id) return o.model->name + " #" + std::to_string(id);
-      return "#" + std::to_string(id);
-    };
     std::printf("; least stable pair %s / %s (%.1f mm)", name(s.least_stable_pair.first).c_str(),
                 name(s.least_stable_pair.second).c_str(), 1000 * s.least_stable_pair_m);
   }
   std::printf("\n");
   for (const std::string& w : s.warnings) std::printf("run_offline: stability: %s\n", w.c_str());
+  const SceneGraph& g = results.scene_graph;
+  std::string order;
+  for (std::size_t i = 0; i < g.removal_order.size(); ++i)
+    order += (i ? ", " : "") + name(g.removal_order[i]);
+  const auto free = std::count_if(g.nodes.begin(), g.nodes.end(),
+                                  [](const SceneGraphNode& n) { return n.free_to_pick; });
+  std::printf("run_offline: scene graph: %ld of %zu objects free to pick; removal order: %s\n",
+              static_cast<long>(free), g.nodes.size(), order.empty() ? "none" : order.c_str());
+  for (const std::string& w : g.warnings) std::printf("run_offline: scene graph: %s\n", w.c_str());
 }
 
 // What the run made: the background, keyframes and objects, its speed, the detections used.
 void printSummary(const Options& opt, const geofusion::GeoFusionConfig& config,
                   const geofusion::VisionDetectionConverter& vision,
                   const geofusion::RunResults& results, std::size_t occupied,
+                  const geofusion::physics::StabilityResult& stability,
                   geofusion::EstimatorPipeline* pipeline) {
   using namespace geofusion;
   if (pipeline->background()) {
@@ -543,7 +563,7 @@ void printSummary(const Options& opt, const geofusion::GeoFusionConfig& config,
       results.final_map.contacts.size(), results.wall_time_s, duration,
       duration > 0 ? results.wall_time_s / duration : 0.0, opt.out.c_str());
   std::printf("run_offline: detections: %s\n", pipeline->tally().summary().c_str());
-  printStability(config, results);
+  printStability(config, results, stability);
   std::printf("run_offline: objects removed: %s; relocalisation searched: %s\n",
               reasonsLine(removalsByReason(results)).c_str(),
               reasonsLine(relocalisationsByDecision(results)).c_str());
@@ -649,9 +669,10 @@ int main(int argc, char** argv) {
     return 1;
   }
   finishResults(&pipeline, start, &results);
+  const physics::StabilityResult stability = checkFinalMap(config, &results);
   std::size_t occupied = 0;
   if (!writeOutputs(opt, &pipeline, &results, &occupied, &error)) return 1;
-  printSummary(opt, config, vision, results, occupied, &pipeline);
+  printSummary(opt, config, vision, results, occupied, stability, &pipeline);
   printWarnings(opt, config, pipeline, results);
   return 0;
 }

@@ -132,6 +132,29 @@ def test_the_demo_through_the_module_is_run_offlines_map(demo):
     line = next(l for l in printed.splitlines() if l.startswith('run_offline: stability'))
     assert '%d of %d objects stable, %d more start interpenetrating' % (
         stability['stable'], stability['checked'], stability['interpenetrating']) in line, line
+    # ... and its plan is the one in run_offline's results file, with the check's verdicts.
+    graph = estimator.scene_graph()
+    written = expected['final_map']['scene_graph']
+    assert graph['removal_order'] == written['removal_order']
+    assert sorted(graph['removal_order']) == sorted(want)
+    by_id = {o['id']: o for o in written['objects']}
+    verdict = {o['id']: o['stable'] for o in stability['objects']}
+    for o in graph['objects']:
+        w = by_id[o['id']]
+        for key in ('supported_by', 'supports', 'leans_on', 'leaned_on_by', 'beside',
+                    'free_to_pick', 'removal_step'):
+            assert o[key] == w[key], (o['id'], key)
+        assert o['stable'] == verdict[o['id']] == bool(w['stable'])
+        assert o['free_to_pick'] == (not o['supports'] and not o['leaned_on_by'])
+    # The plan takes nothing before what rests or leans on it.
+    step = {i: graph['removal_order'].index(i) for i in graph['removal_order']}
+    for o in graph['objects']:
+        for above in o['supports'] + o['leaned_on_by']:
+            assert step[above] < step[o['id']], (above, o['id'])
+    assert any(o['supports'] for o in graph['objects']), 'the demo has no stack'
+    line = next(l for l in printed.splitlines() if l.startswith('run_offline: scene graph'))
+    assert '%d of %d objects free to pick' % (
+        sum(o['free_to_pick'] for o in graph['objects']), len(want)) in line, line
 
 
 def test_a_keyframes_result_is_plain_python(demo):

@@ -1,8 +1,10 @@
-// A map's stability (issue 50): its objects on its support plane through the physics module's
-// check. One place for run_offline's summary, the Python API and the evaluation.
+// A map's stability and its support graph as a plan (issue 50): its objects on its support plane
+// through the physics module's check, and its scene graph. One place for run_offline, the Python
+// API, the ROS node and the evaluation.
 #pragma once
 #include "geofusion/estimation/relations.h"
 #include "geofusion/estimation/scene_estimator.h"
+#include "geofusion/estimation/scene_graph.h"
 #include "geofusion/physics/stability.h"
 
 #include <vector>
@@ -15,5 +17,12 @@ physics::StabilityResult checkMapStability(const std::vector<ObjectEstimate>& ob
                                            const SupportPlane* plane,
                                            const Eigen::Vector3d& gravity,
                                            const physics::StabilityConfig& config);
+
+/// The map's scene graph (scene_graph.h) from its contacts (indices into `objects`): the existence
+/// score is what the robot sees best, the centre the model box's; whether each object stands
+/// comes from `stability` when given (its check of the same objects).
+SceneGraph mapSceneGraph(const std::vector<ObjectEstimate>& objects,
+                         const std::vector<FeatureContact>& contacts,
+                         const Eigen::Vector3d& gravity, const physics::StabilityResult* stability);
 
 }  // namespace geofusion

@@ -6,6 +6,7 @@
 
 #include "geofusion/common/statistics.h"
 #include "geofusion/estimation/scene_estimator.h"
+#include "geofusion/estimation/scene_graph.h"
 
 #include <cstdint>
 #include <string>
@@ -34,6 +35,10 @@ struct RunResults {
   std::vector<KeyframeResult> keyframes;
   KeyframeResult final_map;    ///< after SceneEstimator::finish()
   SupportPlane support_plane;  ///< the estimator's table plane (map frame), when it found one
+  /// The final map's support graph as a plan (scene_graph.h; `final_map.scene_graph` in the
+  /// file), with its stability check's verdicts; written when has_scene_graph, not read back.
+  bool has_scene_graph = false;
+  SceneGraph scene_graph;
   std::vector<double> trajectory_stamps;
   std::vector<Eigen::Isometry3d> trajectory;  ///< final estimate of T_map_cam per keyframe
   /// A saved map (map_store.h): its id, the background file it belongs to (name beside the YAML,

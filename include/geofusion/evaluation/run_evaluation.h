@@ -10,6 +10,7 @@
 #include "geofusion/common/camera.h"
 #include "geofusion/common/image_box.h"
 #include "geofusion/estimation/run_results.h"
+#include "geofusion/estimation/scene_graph.h"
 #include "geofusion/physics/stability.h"
 #include "geofusion/simulation/dataset.h"
 
@@ -178,6 +179,16 @@ struct RunEvaluation {
   /// interpenetrating (reported apart, not stable).
   int stability_true_objects = 0, stability_true_stable = 0, stability_true_interpenetrating = 0;
   std::string least_stable_pair;  ///< as deepest_pair, "table" for the plane
+  /// The final map's support graph as a plan (estimation/scene_graph.h) against the truth's: the
+  /// removal order's steps that take a true object; unsafe: a true object the map also has still
+  /// rests or leans on it (the order's fault); under a missed object: only objects the map lacks
+  /// do (the detection's fault). Free to pick: the map's true objects it calls free, of them
+  /// free in the truth, and the true objects free in the truth the map has.
+  bool has_scene_graph = false;
+  SceneGraph scene_graph;
+  int plan_steps = 0, plan_unsafe_steps = 0, plan_steps_under_missed = 0;
+  std::string first_unsafe_step;  ///< "took class #id (true) before class #id resting on it"
+  int free_predicted = 0, free_correct = 0, free_true = 0;
   std::vector<GraphObject> graph_true_objects, graph_estimated_objects;
   std::vector<GraphContact> graph_true_contacts, graph_estimated_contacts;
 
