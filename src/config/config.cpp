@@ -650,35 +650,9 @@ class Table {
          "stability check: bodies of the models' convex parts (true) or of their convex hulls, as "
          "the generator settles its scenes (false)",
          [f](GeoFusionConfig& c) { return &f(c)->convex_parts; });
-    real(p + "duration_s", 1e-3, 60, "... simulated time under gravity, s",
-         [f](GeoFusionConfig& c) { return &f(c)->duration_s; });
-    real(p + "time_step_s", 1e-4, 0.02, "... Bullet's fixed step, s",
-         [f](GeoFusionConfig& c) { return &f(c)->time_step_s; });
-    real(p + "density_kg_m3", 10, 20000,
-         "... every object's density (mass = density x volume), kg/m^3",
-         [f](GeoFusionConfig& c) { return &f(c)->density_kg_m3; });
-    real(p + "friction", 0, 2, "... Coulomb friction of objects and support plane",
-         [f](GeoFusionConfig& c) { return &f(c)->friction; });
-    real(p + "rolling_friction", 0, 0.1, "... rolling and spinning friction",
-         [f](GeoFusionConfig& c) { return &f(c)->rolling_friction; });
-    real(p + "linear_damping", 0, 0.99, "... Bullet's linear velocity damping",
-         [f](GeoFusionConfig& c) { return &f(c)->linear_damping; });
-    real(p + "angular_damping", 0, 0.99, "... Bullet's angular velocity damping",
-         [f](GeoFusionConfig& c) { return &f(c)->angular_damping; });
-    real(p + "gravity_m_s2", 0.01, 50, "... gravity along the map's gravity direction, m/s^2",
-         [f](GeoFusionConfig& c) { return &f(c)->gravity_m_s2; });
-    real(p + "stable_translation_m", 1e-6, 1,
-         "... stable: the centre of mass moves less than this, m",
-         [f](GeoFusionConfig& c) { return &f(c)->stable_translation_m; });
-    real(p + "stable_rotation_deg", 1e-3, 180, "... and the object turns less than this, deg",
-         [f](GeoFusionConfig& c) { return &f(c)->stable_rotation_deg; });
-    real(
-        p + "start_penetration_m", 0, 1,
-        "... objects deeper than this into another or the plane at the start are reported apart, m",
-        [f](GeoFusionConfig& c) { return &f(c)->start_penetration_m; });
-    real(p + "contact_distance_m", 0, 1,
-         "... objects closer than this at the start are a pair in contact, m",
-         [f](GeoFusionConfig& c) { return &f(c)->contact_distance_m; });
+    for (const physics::StabilitySetting& s : physics::stabilitySettings())
+      real(p + s.key, s.min, s.max, s.doc,
+           [field = s.field](GeoFusionConfig& c) { return &(c.physics.*field); });
   }
   void visionMsgs() {
     text("vision_msgs.class_map",

@@ -14,14 +14,14 @@ physics::StabilityResult checkMapStability(const std::vector<ObjectEstimate>& ob
   return physics::checkStability(bodies, &support, gravity, config);
 }
 
-SceneGraph mapSceneGraph(const std::vector<ObjectEstimate>& objects,
+SupportGraph mapSupportGraph(const std::vector<ObjectEstimate>& objects,
                          const std::vector<FeatureContact>& contacts,
                          const Eigen::Vector3d& gravity,
                          const physics::StabilityResult* stability) {
-  std::vector<SceneGraphObject> list;
+  std::vector<SupportGraphObject> list;
   list.reserve(objects.size());
   for (const ObjectEstimate& o : objects) {
-    SceneGraphObject g;
+    SupportGraphObject g;
     g.id = o.id;
     g.visibility = o.existence;
     g.centre = o.T_map_obj.translation();
@@ -35,7 +35,7 @@ SceneGraph mapSceneGraph(const std::vector<ObjectEstimate>& objects,
     }
     list.push_back(std::move(g));
   }
-  return buildSceneGraph(list, contacts, gravity);
+  return buildSupportGraph(list, contacts, gravity);
 }
 
 }  // namespace geofusion

@@ -55,11 +55,11 @@ void emitContacts(YAML::Emitter& out, const KeyframeResult& r) {
 
 // The final map's scene graph: the removal order, then per object its relations (ids, -1 the
 // support plane), whether it stands (-1: not checked) and whether it is free to pick.
-void emitSceneGraph(YAML::Emitter& out, const SceneGraph& g) {
+void emitSceneGraph(YAML::Emitter& out, const SupportGraph& g) {
   out << YAML::Key << "scene_graph" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "removal_order" << YAML::Value << YAML::Flow << g.removal_order;
   out << YAML::Key << "objects" << YAML::Value << YAML::BeginSeq;
-  for (const SceneGraphNode& n : g.nodes) {
+  for (const SupportGraphNode& n : g.nodes) {
     out << YAML::Flow << YAML::BeginMap;
     out << YAML::Key << "id" << YAML::Value << n.id;
     out << YAML::Key << "class" << YAML::Value << n.class_name;

@@ -17,13 +17,13 @@ void addOnce(std::vector<int>* list, int id) {
 constexpr double kLevelNormal = 0.05;
 
 // One contact into the nodes' relations (indices into `objects`, -1 the plane).
-void addRelation(const std::vector<SceneGraphObject>& objects, const FeatureContact& c,
-                 const Eigen::Vector3d& up, std::vector<SceneGraphNode>* nodes) {
+void addRelation(const std::vector<SupportGraphObject>& objects, const FeatureContact& c,
+                 const Eigen::Vector3d& up, std::vector<SupportGraphNode>* nodes) {
   const int n = static_cast<int>(objects.size());
   if (c.object_a >= n || c.object_b >= n || c.object_a < -1 || c.object_b < -1 ||
       c.object_a == c.object_b || (c.object_a < 0 && c.object_b < 0))
     return;
-  auto idOf = [&](int i) { return i < 0 ? SceneGraph::kSupportPlaneId : objects[i].id; };
+  auto idOf = [&](int i) { return i < 0 ? SupportGraph::kSupportPlaneId : objects[i].id; };
   auto node = [&](int i) { return i < 0 ? nullptr : &(*nodes)[static_cast<std::size_t>(i)]; };
   int lower = c.object_a, upper = c.object_b;  // a support contact: a supports b
   if (c.kind == ContactKind::kSide) {
@@ -53,7 +53,7 @@ void addRelation(const std::vector<SceneGraphObject>& objects, const FeatureCont
 
 // Whether object i goes before j among those free to take: seen better, then higher, then the
 // lower id.
-bool takenBefore(const SceneGraphObject& i, const SceneGraphObject& j, const Eigen::Vector3d& up) {
+bool takenBefore(const SupportGraphObject& i, const SupportGraphObject& j, const Eigen::Vector3d& up) {
   if (i.visibility != j.visibility) return i.visibility > j.visibility;
   const double hi = i.centre.dot(up), hj = j.centre.dot(up);
   if (hi != hj) return hi > hj;
@@ -62,13 +62,13 @@ bool takenBefore(const SceneGraphObject& i, const SceneGraphObject& j, const Eig
 
 // The removal order: repeatedly the best-seen object that nothing left rests or leans on; in a
 // cycle, the highest object left.
-void orderRemovals(const std::vector<SceneGraphObject>& objects, const Eigen::Vector3d& up,
-                   SceneGraph* graph) {
+void orderRemovals(const std::vector<SupportGraphObject>& objects, const Eigen::Vector3d& up,
+                   SupportGraph* graph) {
   std::map<int, int> index_of;
   for (std::size_t i = 0; i < objects.size(); ++i) index_of[objects[i].id] = static_cast<int>(i);
   std::vector<bool> taken(objects.size(), false);
   auto blocked = [&](std::size_t i) {
-    const SceneGraphNode& n = graph->nodes[i];
+    const SupportGraphNode& n = graph->nodes[i];
     for (const std::vector<int>* on : {&n.supports, &n.leaned_on_by})
       for (int id : *on)
         if (!taken[static_cast<std::size_t>(index_of.at(id))]) return true;
@@ -89,7 +89,7 @@ void orderRemovals(const std::vector<SceneGraphObject>& objects, const Eigen::Ve
           best = static_cast<int>(i);
       }
       graph->warnings.push_back("objects rest or lean on each other in a cycle: " +
-                                sceneGraphName(*graph, objects[static_cast<std::size_t>(best)].id) +
+                                supportGraphName(*graph, objects[static_cast<std::size_t>(best)].id) +
                                 ", the highest of them, is taken first");
     }
     taken[static_cast<std::size_t>(best)] = true;
@@ -100,34 +100,34 @@ void orderRemovals(const std::vector<SceneGraphObject>& objects, const Eigen::Ve
 
 }  // namespace
 
-const SceneGraphNode* SceneGraph::find(int id) const {
-  for (const SceneGraphNode& n : nodes)
+const SupportGraphNode* SupportGraph::find(int id) const {
+  for (const SupportGraphNode& n : nodes)
     if (n.id == id) return &n;
   return nullptr;
 }
 
-std::string sceneGraphName(const SceneGraph& graph, int id) {
-  if (id == SceneGraph::kSupportPlaneId) return "table";
-  const SceneGraphNode* n = graph.find(id);
+std::string supportGraphName(const SupportGraph& graph, int id) {
+  if (id == SupportGraph::kSupportPlaneId) return "table";
+  const SupportGraphNode* n = graph.find(id);
   return (n && !n->class_name.empty() ? n->class_name + " " : std::string()) + "#" +
          std::to_string(id);
 }
 
-SceneGraph buildSceneGraph(const std::vector<SceneGraphObject>& objects,
+SupportGraph buildSupportGraph(const std::vector<SupportGraphObject>& objects,
                            const std::vector<FeatureContact>& contacts,
                            const Eigen::Vector3d& gravity) {
-  SceneGraph graph;
+  SupportGraph graph;
   const Eigen::Vector3d up =
       gravity.norm() > 0.0 ? Eigen::Vector3d(-gravity.normalized()) : Eigen::Vector3d::UnitZ();
-  for (const SceneGraphObject& o : objects) {
-    SceneGraphNode node;
+  for (const SupportGraphObject& o : objects) {
+    SupportGraphNode node;
     node.id = o.id;
     node.class_name = o.class_name;
     node.stable = o.stable;
     graph.nodes.push_back(node);
   }
   for (const FeatureContact& c : contacts) addRelation(objects, c, up, &graph.nodes);
-  for (SceneGraphNode& n : graph.nodes)
+  for (SupportGraphNode& n : graph.nodes)
     n.free_to_pick = n.supports.empty() && n.leaned_on_by.empty();
   orderRemovals(objects, up, &graph);
   return graph;

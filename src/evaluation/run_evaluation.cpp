@@ -509,6 +509,26 @@ void evaluatePlausibility(const GroundTruth& gt, const RunResults& results, cons
   }
 }
 
+// How high the map's objects on the table stand above it, against their true poses brought into
+// the map's frame (the real frames' lift, issue 50).
+void evaluateTableClearance(const GroundTruth& gt, const RunResults& results, const MapScore& score,
+                            RunEvaluation* ev) {
+  const std::vector<ObjectEstimate>& map = results.final_map.objects;
+  const Plane table = tableOf(gt, results, *ev);
+  const Eigen::Isometry3d T_est_true = ev->T_true_est.inverse();
+  constexpr double kOnTheTable = 0.02;
+  for (std::size_t i = 0; i < map.size() && i < score.match.size(); ++i) {
+    if (score.match[i] < 0) continue;
+    const SceneObject& truth = gt.scene.objects[static_cast<std::size_t>(score.match[i])];
+    TableClearance c;
+    c.object = describeMapObject(map, score, i);
+    c.truth_m = lowestAbove(*truth.model, T_est_true * truth.T_world_obj, table);
+    c.estimate_m = lowestAbove(*map[i].model, map[i].T_map_obj, table);
+    if (std::min(std::abs(c.truth_m), std::abs(c.estimate_m)) < kOnTheTable)
+      ev->table_clearance.push_back(c);
+  }
+}
+
 // The stability settings of the run: its configuration's `physics` section (the defaults when
 // the results carry none or it does not load; a warning says so).
 physics::StabilityConfig stabilitySettings(const RunResults& results, RunEvaluation* ev) {
@@ -566,11 +586,11 @@ void evaluateStability(const GroundTruth& gt, const RunResults& results, const M
 }
 
 // The true scene's support graph at the end (objects taken away keep no relation).
-SceneGraph trueSceneGraph(const GroundTruth& gt) {
-  std::vector<SceneGraphObject> objects;
+SupportGraph trueSceneGraph(const GroundTruth& gt) {
+  std::vector<SupportGraphObject> objects;
   for (std::size_t i = 0; i < gt.scene.objects.size(); ++i) {
     const SceneObject& o = gt.scene.objects[i];
-    SceneGraphObject g;
+    SupportGraphObject g;
     g.id = static_cast<int>(i);
     g.class_name = o.model->name;
     g.centre = o.T_world_obj * boxOf(*o.model).center().cast<double>();
@@ -579,7 +599,7 @@ SceneGraph trueSceneGraph(const GroundTruth& gt) {
   std::vector<FeatureContact> contacts;
   for (const FeatureContact& c : gt.scene.contacts)
     if (bothThereAtTheEnd(gt.scene, c)) contacts.push_back(c);
-  return buildSceneGraph(objects, contacts, -Eigen::Vector3d::UnitZ());
+  return buildSupportGraph(objects, contacts, -Eigen::Vector3d::UnitZ());
 }
 
 // The map's removal order against the true support graph (issue 50): each step that takes a true
@@ -589,9 +609,9 @@ void evaluateSceneGraph(const GroundTruth& gt, const RunResults& results, const 
                         RunEvaluation* ev) {
   const std::vector<ObjectEstimate>& map = results.final_map.objects;
   const Plane table = tableOf(gt, results, *ev);
-  ev->scene_graph = mapSceneGraph(map, results.final_map.contacts, -table.n,
-                                  ev->has_stability ? &ev->stability : nullptr);
-  const SceneGraph truth = trueSceneGraph(gt);
+  ev->scene_graph = mapSupportGraph(map, results.final_map.contacts, -table.n,
+                                    ev->has_stability ? &ev->stability : nullptr);
+  const SupportGraph truth = trueSceneGraph(gt);
   std::map<int, int> truth_of_id;  // map id -> true index
   for (std::size_t i = 0; i < map.size() && i < score.match.size(); ++i)
     if (score.match[i] >= 0) truth_of_id[map[i].id] = score.match[i];
@@ -600,7 +620,7 @@ void evaluateSceneGraph(const GroundTruth& gt, const RunResults& results, const 
   for (int id : ev->scene_graph.removal_order) {
     const auto it = truth_of_id.find(id);
     if (it == truth_of_id.end()) continue;  // a false object: nothing true is moved
-    const SceneGraphNode& node = truth.nodes[static_cast<std::size_t>(it->second)];
+    const SupportGraphNode& node = truth.nodes[static_cast<std::size_t>(it->second)];
     int above_in_map = -1;
     bool above_missed = false;
     for (const std::vector<int>* on : {&node.supports, &node.leaned_on_by})
@@ -615,11 +635,11 @@ void evaluateSceneGraph(const GroundTruth& gt, const RunResults& results, const 
     ev->plan_unsafe_steps += above_in_map >= 0;
     ev->plan_steps_under_missed += above_in_map < 0 && above_missed;
     if (above_in_map >= 0 && ev->first_unsafe_step.empty())
-      ev->first_unsafe_step = "took " + sceneGraphName(ev->scene_graph, id) + " (true) before " +
-                              sceneGraphName(truth, above_in_map) +
+      ev->first_unsafe_step = "took " + supportGraphName(ev->scene_graph, id) + " (true) before " +
+                              supportGraphName(truth, above_in_map) +
                               " (true) resting or leaning on it";
     taken.insert(it->second);
-    const SceneGraphNode* estimated = ev->scene_graph.find(id);
+    const SupportGraphNode* estimated = ev->scene_graph.find(id);
     ev->free_predicted += estimated && estimated->free_to_pick;
     ev->free_correct += estimated && estimated->free_to_pick && node.free_to_pick;
     ev->free_true += node.free_to_pick;
@@ -755,6 +775,7 @@ bool evaluateRun(const GroundTruth& gt, const RunResults& results, const Evaluat
   evaluateContactGraph(gt, results, score, &ev);
   evaluateDetectorErrors(gt, results.final_map.objects, score, config, &ev);
   evaluatePlausibility(gt, results, score, config, &ev);
+  evaluateTableClearance(gt, results, score, &ev);
   evaluateStability(gt, results, score, &ev);
   evaluateSceneGraph(gt, results, score, &ev);
   evaluateLifecycle(gt, results, frames, score, config, &ev);
@@ -809,20 +830,10 @@ nlohmann::json sceneGraphJson(const RunEvaluation& e) {
 // The stability block: the settings, the map's check, its true objects, the truth's check.
 nlohmann::json stabilityJson(const RunEvaluation& e) {
   const physics::StabilityConfig& c = e.stability_config;
-  return {{"settings",
-           {{"convex_parts", c.convex_parts},
-            {"duration_s", c.duration_s},
-            {"time_step_s", c.time_step_s},
-            {"density_kg_m3", c.density_kg_m3},
-            {"friction", c.friction},
-            {"rolling_friction", c.rolling_friction},
-            {"linear_damping", c.linear_damping},
-            {"angular_damping", c.angular_damping},
-            {"gravity_m_s2", c.gravity_m_s2},
-            {"stable_translation_m", c.stable_translation_m},
-            {"stable_rotation_deg", c.stable_rotation_deg},
-            {"start_penetration_m", c.start_penetration_m},
-            {"contact_distance_m", c.contact_distance_m}}},
+  nlohmann::json settings = {{"convex_parts", c.convex_parts}};
+  for (const physics::StabilitySetting& s : physics::stabilitySettings())
+    settings[s.key] = c.*s.field;
+  return {{"settings", settings},
           {"true_objects", e.stability_true_objects},
           {"true_stable", e.stability_true_stable},
           {"true_interpenetrating", e.stability_true_interpenetrating},
@@ -1073,6 +1084,12 @@ bool writeEvaluationJson(const std::string& path, const RunEvaluation& e, std::s
                     {"widest_gap_pair", e.widest_gap_pair}};
   if (e.has_stability) j["stability"] = stabilityJson(e);
   if (e.has_scene_graph) j["scene_graph"] = sceneGraphJson(e);
+  nlohmann::json clearance = nlohmann::json::array();
+  for (const TableClearance& c : e.table_clearance)
+    clearance.push_back({{"object", c.object},
+                         {"truth_mm", 1000 * c.truth_m},
+                         {"estimate_mm", 1000 * c.estimate_m}});
+  j["table_clearance"] = clearance;
   j["lifecycle"] = lifecycleJson(e);
   j["trajectory"] = {{"ate_rmse_m", e.alignment_rmse_m},
                      {"odometry_ate_rmse_m", e.odometry_ate_rmse_m}};
@@ -1159,6 +1176,18 @@ std::string summarize(const RunEvaluation& e) {
     if (!e.least_stable_pair.empty())
       s << "    least stable pair: " << e.least_stable_pair << " ("
         << std::lround(10000 * m.least_stable_pair_m) / 10.0 << " mm apart after it)\n";
+  }
+  if (!e.table_clearance.empty()) {
+    double truth = 0.0, estimate = 0.0;
+    for (const TableClearance& c : e.table_clearance) {
+      truth += c.truth_m / e.table_clearance.size();
+      estimate += c.estimate_m / e.table_clearance.size();
+    }
+    std::snprintf(line, sizeof(line),
+                  "  on the table (%zu true objects): lowest point above the map's table %.1f mm "
+                  "true, %.1f mm estimated (mean)\n",
+                  e.table_clearance.size(), 1000 * truth, 1000 * estimate);
+    s << line;
   }
   if (e.has_scene_graph) {
     std::snprintf(line, sizeof(line),

@@ -172,37 +172,41 @@ void summarise(const std::vector<Prepared>& prepared, const std::vector<std::pai
 
 }  // namespace
 
+const std::vector<StabilitySetting>& stabilitySettings() {
+  using C = StabilityConfig;
+  static const std::vector<StabilitySetting> settings = {
+      {"duration_s", &C::duration_s, 1e-3, 60, "... simulated time under gravity, s"},
+      {"time_step_s", &C::time_step_s, 1e-4, 0.02, "... Bullet's fixed step, s"},
+      {"density_kg_m3", &C::density_kg_m3, 10, 20000,
+       "... every object's density (mass = density x volume), kg/m^3"},
+      {"friction", &C::friction, 0, 2, "... Coulomb friction of objects and support plane"},
+      {"rolling_friction", &C::rolling_friction, 0, 0.1, "... rolling and spinning friction"},
+      {"linear_damping", &C::linear_damping, 0, 0.99, "... Bullet's linear velocity damping"},
+      {"angular_damping", &C::angular_damping, 0, 0.99, "... Bullet's angular velocity damping"},
+      {"gravity_m_s2", &C::gravity_m_s2, 0.01, 50,
+       "... gravity along the map's gravity direction, m/s^2"},
+      {"stable_translation_m", &C::stable_translation_m, 1e-6, 1,
+       "... stable: the centre of mass moves less than this, m"},
+      {"stable_rotation_deg", &C::stable_rotation_deg, 1e-3, 180,
+       "... and the object turns less than this, deg"},
+      {"start_penetration_m", &C::start_penetration_m, 0, 1,
+       "... objects deeper than this into another or the plane at the start are reported apart, "
+       "m"},
+      {"contact_distance_m", &C::contact_distance_m, 0, 1,
+       "... objects closer than this at the start are a pair in contact, m"}};
+  return settings;
+}
+
 std::vector<std::string> validate(const StabilityConfig& c) {
   std::vector<std::string> errors;
-  auto check = [&errors](bool ok, const char* name, double value, const char* range) {
-    if (ok) return;
-    std::ostringstream s;
-    s << "physics." << name << " = " << value << " is out of range (" << range << ")";
-    errors.push_back(s.str());
-  };
-  check(c.duration_s >= 1e-3 && c.duration_s <= 60.0, "duration_s", c.duration_s,
-        "0.001 <= x <= 60");
-  check(c.time_step_s >= 1e-4 && c.time_step_s <= 0.02, "time_step_s", c.time_step_s,
-        "0.0001 <= x <= 0.02");
-  check(c.density_kg_m3 >= 10.0 && c.density_kg_m3 <= 20000.0, "density_kg_m3", c.density_kg_m3,
-        "10 <= x <= 20000");
-  check(c.friction >= 0.0 && c.friction <= 2.0, "friction", c.friction, "0 <= x <= 2");
-  check(c.rolling_friction >= 0.0 && c.rolling_friction <= 0.1, "rolling_friction",
-        c.rolling_friction, "0 <= x <= 0.1");
-  check(c.linear_damping >= 0.0 && c.linear_damping <= 0.99, "linear_damping", c.linear_damping,
-        "0 <= x <= 0.99");
-  check(c.angular_damping >= 0.0 && c.angular_damping <= 0.99, "angular_damping", c.angular_damping,
-        "0 <= x <= 0.99");
-  check(c.gravity_m_s2 >= 0.01 && c.gravity_m_s2 <= 50.0, "gravity_m_s2", c.gravity_m_s2,
-        "0.01 <= x <= 50");
-  check(c.stable_translation_m >= 1e-6 && c.stable_translation_m <= 1.0, "stable_translation_m",
-        c.stable_translation_m, "1e-6 <= x <= 1");
-  check(c.stable_rotation_deg >= 1e-3 && c.stable_rotation_deg <= 180.0, "stable_rotation_deg",
-        c.stable_rotation_deg, "0.001 <= x <= 180");
-  check(c.start_penetration_m >= 0.0 && c.start_penetration_m <= 1.0, "start_penetration_m",
-        c.start_penetration_m, "0 <= x <= 1");
-  check(c.contact_distance_m >= 0.0 && c.contact_distance_m <= 1.0, "contact_distance_m",
-        c.contact_distance_m, "0 <= x <= 1");
+  for (const StabilitySetting& s : stabilitySettings()) {
+    const double value = c.*s.field;
+    if (value >= s.min && value <= s.max) continue;  // NaN fails both
+    std::ostringstream m;
+    m << "physics." << s.key << " = " << value << " is out of range (" << s.min
+      << " <= x <= " << s.max << ")";
+    errors.push_back(m.str());
+  }
   return errors;
 }
 

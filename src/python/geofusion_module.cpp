@@ -191,10 +191,10 @@ class PyEstimator {
     const SupportPlane& plane = estimator_->supportPlane();
     const physics::StabilityResult stability = checkMapStability(
         estimator_->objects(), &plane, config_.estimator.gravity, config_.physics);
-    const SceneGraph g =
-        mapSceneGraph(estimator_->objects(), contacts_, config_.estimator.gravity, &stability);
+    const SupportGraph g =
+        mapSupportGraph(estimator_->objects(), contacts_, config_.estimator.gravity, &stability);
     py::list nodes;
-    for (const SceneGraphNode& n : g.nodes)
+    for (const SupportGraphNode& n : g.nodes)
       nodes.append(py::dict(
           py::arg("id") = n.id, py::arg("class_name") = n.class_name,
           py::arg("supported_by") = n.supported_by, py::arg("supports") = n.supports,

@@ -86,6 +86,33 @@ geofusion::MapObject toMapObjectMsg(const ObjectEstimate& o) {
   return m;
 }
 
+geofusion::SceneGraph toSceneGraphMsg(const SupportGraph& graph, const std_msgs::Header& header) {
+  auto ids = [](const std::vector<int>& list) {
+    std::vector<uint32_t> out;
+    for (int id : list) out.push_back(messageId(id));  // the plane (-1) becomes 0
+    return out;
+  };
+  geofusion::SceneGraph msg;
+  msg.header = header;
+  for (const SupportGraphNode& n : graph.nodes) {
+    geofusion::SceneGraphObject o;
+    o.id = messageId(n.id);
+    o.class_name = n.class_name;
+    o.supported_by = ids(n.supported_by);
+    o.supports = ids(n.supports);
+    o.leans_on = ids(n.leans_on);
+    o.leaned_on_by = ids(n.leaned_on_by);
+    o.beside = ids(n.beside);
+    o.stable = static_cast<int8_t>(n.stable);
+    o.free_to_pick = n.free_to_pick;
+    o.removal_step = n.removal_step;
+    msg.objects.push_back(std::move(o));
+  }
+  msg.removal_order = ids(graph.removal_order);
+  msg.warnings = graph.warnings;
+  return msg;
+}
+
 geofusion::ObjectMap toObjectMapMsg(const KeyframeResult& r, const SupportPlane& plane,
                                     const Eigen::Vector3d& gravity,
                                     const std_msgs::Header& header) {

@@ -2,6 +2,7 @@
 
 #include "geofusion/common/atomic_file.h"
 #include "geofusion/estimation/bop_results.h"
+#include "geofusion/estimation/map_stability.h"
 #include "geofusion/estimation/run_results.h"
 #include "geofusion/ros/conversions.h"
 #include "geofusion/ros/map_messages.h"
@@ -86,6 +87,7 @@ void SceneEstimatorNode::advertise() {
   map_pub_ = pnh_.advertise<geofusion::ObjectMap>("object_map", 1, true);
   markers_pub_ = pnh_.advertise<visualization_msgs::MarkerArray>("map_markers", 1, true);
   path_pub_ = pnh_.advertise<nav_msgs::Path>("trajectory", 1, true);
+  scene_graph_pub_ = pnh_.advertise<geofusion::SceneGraph>("scene_graph", 1, true);
   background_markers_pub_ =
       pnh_.advertise<visualization_msgs::MarkerArray>("background_markers", 1, true);
   background_cloud_pub_ = pnh_.advertise<sensor_msgs::PointCloud2>("background_cloud", 1, true);
@@ -112,6 +114,7 @@ void SceneEstimatorNode::advertise() {
   save_bop_srv_ = pnh_.advertiseService("save_bop_results", &SceneEstimatorNode::onSaveBop, this);
   load_srv_ = pnh_.advertiseService("load_map", &SceneEstimatorNode::onLoad, this);
   reset_srv_ = pnh_.advertiseService("reset", &SceneEstimatorNode::onReset, this);
+  scene_graph_srv_ = pnh_.advertiseService("scene_graph", &SceneEstimatorNode::onSceneGraph, this);
 }
 
 void SceneEstimatorNode::startReconfigure() {
@@ -467,6 +470,10 @@ void SceneEstimatorNode::publish(const KeyframeResult& result, const std_msgs::H
   }
   map_pub_.publish(toObjectMapMsg(result, plane, gravity, header));
   markers_pub_.publish(mapMarkers(result, plane, header));
+  // The plan (its stability check: a few ms for a table of objects, docs/scene_graph.md) only
+  // for listeners; the service makes it on demand.
+  if (scene_graph_pub_.getNumSubscribers() > 0)
+    scene_graph_pub_.publish(sceneGraphOf(result, plane, gravity, header));
   nav_msgs::Path path;
   path.header = header;
   for (std::size_t i = 0; i < trajectory.size(); ++i) {
@@ -839,6 +846,40 @@ bool SceneEstimatorNode::onSave(geofusion::SaveMap::Request& req,
     return true;
   }
   res.success = save(req.path, &res.message, &res.files);
+  return true;
+}
+
+// The map's support graph as a plan, its stability checked on the map's support plane.
+geofusion::SceneGraph SceneEstimatorNode::sceneGraphOf(const KeyframeResult& map,
+                                                       const SupportPlane& plane,
+                                                       const Eigen::Vector3d& gravity,
+                                                       const std_msgs::Header& header) const {
+  const physics::StabilityResult stability =
+      checkMapStability(map.objects, &plane, gravity, config_.physics);
+  for (const std::string& w : stability.warnings)
+    ROS_WARN_STREAM_THROTTLE(warn_period_s_, "geofusion: scene graph: stability: " << w);
+  const SupportGraph graph = mapSupportGraph(map.objects, map.contacts, gravity, &stability);
+  for (const std::string& w : graph.warnings)
+    ROS_WARN_STREAM_THROTTLE(warn_period_s_, "geofusion: scene graph: " << w);
+  return toSceneGraphMsg(graph, header);
+}
+
+// ~scene_graph: the current map's plan, made now.
+bool SceneEstimatorNode::onSceneGraph(geofusion::GetSceneGraph::Request& /*req*/,
+                                      geofusion::GetSceneGraph::Response& res) {
+  KeyframeResult map;
+  SupportPlane plane;
+  Eigen::Vector3d gravity;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    map = pipeline_->currentMap(false).final_map;
+    plane = pipeline_->estimator().supportPlane();
+    gravity = pipeline_->estimator().config().gravity;
+  }
+  std_msgs::Header header;
+  header.frame_id = map_frame_;
+  header.stamp = ros::Time(std::max(0.0, map.stamp_s));
+  res.graph = sceneGraphOf(map, plane, gravity, header);
   return true;
 }
 

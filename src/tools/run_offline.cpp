@@ -502,7 +502,7 @@ geofusion::physics::StabilityResult checkFinalMap(const geofusion::GeoFusionConf
   physics::StabilityResult s =
       checkMapStability(results->final_map.objects, &results->support_plane,
                         config.estimator.gravity, config.physics);
-  results->scene_graph = mapSceneGraph(results->final_map.objects, results->final_map.contacts,
+  results->scene_graph = mapSupportGraph(results->final_map.objects, results->final_map.contacts,
                                        config.estimator.gravity, &s);
   results->has_scene_graph = true;
   return s;
@@ -513,8 +513,8 @@ void printStability(const geofusion::GeoFusionConfig& config, const geofusion::R
                     const geofusion::physics::StabilityResult& s) {
   using namespace geofusion;
   auto name = [&](int id) {
-    return sceneGraphName(results.scene_graph,
-                          id == physics::kPlaneId ? SceneGraph::kSupportPlaneId : id);
+    return supportGraphName(results.scene_graph,
+                          id == physics::kPlaneId ? SupportGraph::kSupportPlaneId : id);
   };
   std::printf(
       "run_offline: stability (%.1f s of gravity): %d of %d objects stable, %d more start "
@@ -527,12 +527,12 @@ void printStability(const geofusion::GeoFusionConfig& config, const geofusion::R
   }
   std::printf("\n");
   for (const std::string& w : s.warnings) std::printf("run_offline: stability: %s\n", w.c_str());
-  const SceneGraph& g = results.scene_graph;
+  const SupportGraph& g = results.scene_graph;
   std::string order;
   for (std::size_t i = 0; i < g.removal_order.size(); ++i)
     order += (i ? ", " : "") + name(g.removal_order[i]);
   const auto free = std::count_if(g.nodes.begin(), g.nodes.end(),
-                                  [](const SceneGraphNode& n) { return n.free_to_pick; });
+                                  [](const SupportGraphNode& n) { return n.free_to_pick; });
   std::printf("run_offline: scene graph: %ld of %zu objects free to pick; removal order: %s\n",
               static_cast<long>(free), g.nodes.size(), order.empty() ? "none" : order.c_str());
   for (const std::string& w : g.warnings) std::printf("run_offline: scene graph: %s\n", w.c_str());

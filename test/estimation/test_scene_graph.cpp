@@ -23,8 +23,8 @@ FeatureContact contact(int a, int b, ContactKind kind,
   return c;
 }
 
-SceneGraphObject object(int id, const std::string& name, double z, double visibility = 0.5) {
-  SceneGraphObject o;
+SupportGraphObject object(int id, const std::string& name, double z, double visibility = 0.5) {
+  SupportGraphObject o;
   o.id = id;
   o.class_name = name;
   o.centre = Eigen::Vector3d(0, 0, z);
@@ -32,10 +32,10 @@ SceneGraphObject object(int id, const std::string& name, double z, double visibi
   return o;
 }
 
-TEST(SceneGraph, RelationsFreeObjectsAndATopFirstOrder) {
+TEST(SupportGraph, RelationsFreeObjectsAndATopFirstOrder) {
   // The table holds the box (id 4) and the can (7); the box holds the mug (9); the plate (5)
   // leans on the box with its normal tilted up from the box; the can stands beside the box.
-  const std::vector<SceneGraphObject> objects = {
+  const std::vector<SupportGraphObject> objects = {
       object(4, "box", 0.05, 0.9), object(9, "mug", 0.15, 0.2), object(5, "plate", 0.10, 0.8),
       object(7, "can", 0.06, 0.7)};
   const Eigen::Vector3d tilted = Eigen::Vector3d(1, 0, 0.6).normalized();
@@ -43,11 +43,11 @@ TEST(SceneGraph, RelationsFreeObjectsAndATopFirstOrder) {
       contact(-1, 0, ContactKind::kSupport), contact(-1, 3, ContactKind::kSupport),
       contact(0, 1, ContactKind::kSupport), contact(0, 2, ContactKind::kLeaning, tilted),
       contact(3, 0, ContactKind::kSide, Eigen::Vector3d::UnitX())};
-  const SceneGraph g = buildSceneGraph(objects, contacts, Eigen::Vector3d(0, 0, -9.81));
+  const SupportGraph g = buildSupportGraph(objects, contacts, Eigen::Vector3d(0, 0, -9.81));
   ASSERT_EQ(g.nodes.size(), 4u);
-  const SceneGraphNode* box = g.find(4);
+  const SupportGraphNode* box = g.find(4);
   ASSERT_TRUE(box);
-  EXPECT_EQ(box->supported_by, std::vector<int>{SceneGraph::kSupportPlaneId});
+  EXPECT_EQ(box->supported_by, std::vector<int>{SupportGraph::kSupportPlaneId});
   EXPECT_EQ(box->supports, std::vector<int>{9});
   EXPECT_EQ(box->leaned_on_by, std::vector<int>{5});
   EXPECT_EQ(box->beside, std::vector<int>{7});
@@ -59,22 +59,22 @@ TEST(SceneGraph, RelationsFreeObjectsAndATopFirstOrder) {
   EXPECT_EQ(g.removal_order, (std::vector<int>{5, 7, 9, 4}));
   EXPECT_EQ(g.find(4)->removal_step, 3);
   EXPECT_TRUE(g.warnings.empty());
-  EXPECT_EQ(sceneGraphName(g, 9), "mug #9");
-  EXPECT_EQ(sceneGraphName(g, SceneGraph::kSupportPlaneId), "table");
+  EXPECT_EQ(supportGraphName(g, 9), "mug #9");
+  EXPECT_EQ(supportGraphName(g, SupportGraph::kSupportPlaneId), "table");
 }
 
-TEST(SceneGraph, LevelLeaningUsesHeightsAndACycleIsBrokenAtTheTop) {
+TEST(SupportGraph, LevelLeaningUsesHeightsAndACycleIsBrokenAtTheTop) {
   // A leaning contact whose normal is level (from markLeaning): the higher object leans. The
   // normal runs from a (the higher one) to b, so only the centres can say.
-  const std::vector<SceneGraphObject> objects = {object(1, "board", 0.12), object(2, "box", 0.04)};
-  const SceneGraph lean =
-      buildSceneGraph(objects, {contact(0, 1, ContactKind::kLeaning, Eigen::Vector3d::UnitX())},
+  const std::vector<SupportGraphObject> objects = {object(1, "board", 0.12), object(2, "box", 0.04)};
+  const SupportGraph lean =
+      buildSupportGraph(objects, {contact(0, 1, ContactKind::kLeaning, Eigen::Vector3d::UnitX())},
                       Eigen::Vector3d(0, 0, -1));
   EXPECT_EQ(lean.find(1)->leans_on, std::vector<int>{2});
   EXPECT_EQ(lean.removal_order, (std::vector<int>{1, 2}));
   // Two estimates each holding the other up (a wrong map): a cycle, said, the higher taken first.
-  const SceneGraph cycle =
-      buildSceneGraph(objects,
+  const SupportGraph cycle =
+      buildSupportGraph(objects,
                       {contact(0, 1, ContactKind::kSupport), contact(1, 0, ContactKind::kSupport),
                        contact(5, 0, ContactKind::kSupport)},  // names no object: skipped
                       Eigen::Vector3d(0, 0, -1));
@@ -97,7 +97,7 @@ double largestMotionWithout(const ClutterScene& scene, const std::vector<int>& t
   return result.max_translation_m;
 }
 
-TEST(SceneGraph, TheGeneratorsStacksComeApartSafelyInPlanOrder) {
+TEST(SupportGraph, TheGeneratorsStacksComeApartSafelyInPlanOrder) {
   ClutterConfig config;
   config.num_objects = 10;
   config.stack_fraction = 0.6;
@@ -109,19 +109,19 @@ TEST(SceneGraph, TheGeneratorsStacksComeApartSafelyInPlanOrder) {
        ++tries)
     ++seed;
   ASSERT_LE(scene.max_penetration_m, config.max_penetration_m) << report;
-  std::vector<SceneGraphObject> objects;
+  std::vector<SupportGraphObject> objects;
   for (std::size_t i = 0; i < scene.objects.size(); ++i)
     objects.push_back(object(int(i), scene.objects[i].model->name,
                              scene.objects[i].T_world_obj.translation().z()));
-  const SceneGraph g = buildSceneGraph(objects, scene.contacts, Eigen::Vector3d(0, 0, -1));
+  const SupportGraph g = buildSupportGraph(objects, scene.contacts, Eigen::Vector3d(0, 0, -1));
   ASSERT_EQ(g.removal_order.size(), scene.objects.size());
   EXPECT_TRUE(g.warnings.empty());
   // A supporter of something: taking it first makes what it held move.
   const auto supporter = std::find_if(g.nodes.begin(), g.nodes.end(),
-                                      [](const SceneGraphNode& n) { return !n.supports.empty(); });
+                                      [](const SupportGraphNode& n) { return !n.supports.empty(); });
   ASSERT_NE(supporter, g.nodes.end()) << "seed " << seed << " made no stack";
   EXPECT_GT(largestMotionWithout(scene, {supporter->id}), 0.005)
-      << sceneGraphName(g, supporter->id);
+      << supportGraphName(g, supporter->id);
   // In the plan's order, whatever is left stands after every step (a creep of the settled scene
   // aside: under 5 mm).
   std::vector<int> taken;
@@ -129,7 +129,7 @@ TEST(SceneGraph, TheGeneratorsStacksComeApartSafelyInPlanOrder) {
     taken.push_back(id);
     if (taken.size() == scene.objects.size()) break;
     EXPECT_LT(largestMotionWithout(scene, taken), 0.005)
-        << "after taking " << sceneGraphName(g, id) << " (step " << taken.size() << ")";
+        << "after taking " << supportGraphName(g, id) << " (step " << taken.size() << ")";
   }
 }
 

@@ -15,8 +15,8 @@ import rostest
 import tf2_ros
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from dynamic_reconfigure.client import Client
-from geofusion.msg import ObjectMap
-from geofusion.srv import LoadMap, SaveBopResults, SaveMap
+from geofusion.msg import ObjectMap, SceneGraph
+from geofusion.srv import GetSceneGraph, LoadMap, SaveBopResults, SaveMap
 from std_srvs.srv import Trigger
 from sensor_msgs import point_cloud2
 from sensor_msgs.msg import PointCloud2
@@ -46,6 +46,8 @@ class EstimatorReplayTest(unittest.TestCase):
         self.maps, self.markers = [], []
         rospy.Subscriber(NS + '/object_map', ObjectMap, self.on_map, queue_size=100)
         rospy.Subscriber(NS + '/map_markers', MarkerArray, self.on_markers, queue_size=100)
+        self.graphs = []
+        rospy.Subscriber(NS + '/scene_graph', SceneGraph, self.graphs.append, queue_size=100)
         self.clouds, self.diagnostics = [], []
         rospy.Subscriber('/diagnostics', DiagnosticArray,
                          lambda m: self.diagnostics.extend(m.status), queue_size=100)
@@ -57,6 +59,35 @@ class EstimatorReplayTest(unittest.TestCase):
 
     def tearDown(self):
         shutil.rmtree(self.dir, ignore_errors=True)
+
+    def check_scene_graph(self, final):
+        """~scene_graph (issue 50), service and latched topic: the map's objects, its support
+        contacts as relations, and a removal order that takes nothing before what rests on it."""
+        rospy.wait_for_service(NS + '/scene_graph', 5.0)
+        graph = rospy.ServiceProxy(NS + '/scene_graph', GetSceneGraph)().graph
+        ids = sorted(o.id for o in final.objects)
+        self.assertEqual(sorted(o.id for o in graph.objects), ids)
+        self.assertEqual(sorted(graph.removal_order), ids)
+        self.assertEqual(graph.header.frame_id, 'map')
+        node = {o.id: o for o in graph.objects}
+        step = {i: k for k, i in enumerate(graph.removal_order)}
+        supports = [c for c in final.contacts if c.a_supports_b]
+        self.assertTrue(supports, 'the final map has no support contact')
+        for c in supports:
+            self.assertIn(c.object_a, node[c.object_b].supported_by)
+            if c.object_a != 0:  # 0: the table
+                self.assertIn(c.object_b, node[c.object_a].supports)
+                self.assertLess(step[c.object_b], step[c.object_a])
+        for o in graph.objects:
+            self.assertEqual(o.free_to_pick, not o.supports and not o.leaned_on_by, o.id)
+            self.assertEqual(step[o.id], o.removal_step)
+            self.assertIn(o.stable, (0, 1), 'every primitive has a collision shape')
+        self.assertTrue(any(o.stable == 1 for o in graph.objects), 'nothing stands')
+        with self.lock:
+            topic = list(self.graphs)
+        self.assertTrue(topic, 'nothing on ~scene_graph while listening')
+        self.assertEqual(sorted(o.id for o in topic[-1].objects),
+                         sorted(o.id for o in self.maps[-1].objects))
 
     def on_map(self, msg):
         with self.lock:
@@ -197,6 +228,7 @@ class EstimatorReplayTest(unittest.TestCase):
                  ({kv.key: kv.value for kv in d.values} for d in mine)
                  if 'input rate ' + util.DETECTIONS_TOPIC in d_values]
         self.assertGreater(max(rates), 2.0, 'the detections rate never showed (5 Hz played)')
+        self.check_scene_graph(final)
         # Save, then reset.
         rospy.wait_for_service(NS + '/save_map', 5.0)
         prefix = os.path.join(self.dir, 'saved')

@@ -21,7 +21,7 @@ physics::StabilityResult checkMapStability(const std::vector<ObjectEstimate>& ob
 /// The map's scene graph (scene_graph.h) from its contacts (indices into `objects`): the existence
 /// score is what the robot sees best, the centre the model box's; whether each object stands
 /// comes from `stability` when given (its check of the same objects).
-SceneGraph mapSceneGraph(const std::vector<ObjectEstimate>& objects,
+SupportGraph mapSupportGraph(const std::vector<ObjectEstimate>& objects,
                          const std::vector<FeatureContact>& contacts,
                          const Eigen::Vector3d& gravity, const physics::StabilityResult* stability);
 

@@ -38,7 +38,7 @@ struct RunResults {
   /// The final map's support graph as a plan (scene_graph.h; `final_map.scene_graph` in the
   /// file), with its stability check's verdicts; written when has_scene_graph, not read back.
   bool has_scene_graph = false;
-  SceneGraph scene_graph;
+  SupportGraph scene_graph;
   std::vector<double> trajectory_stamps;
   std::vector<Eigen::Isometry3d> trajectory;  ///< final estimate of T_map_cam per keyframe
   /// A saved map (map_store.h): its id, the background file it belongs to (name beside the YAML,

@@ -16,7 +16,7 @@
 namespace geofusion {
 
 /// One object the graph is built over.
-struct SceneGraphObject {
+struct SupportGraphObject {
   int id = -1;  ///< the map's object id (>= 0; the support plane is kSupportPlaneId)
   std::string class_name;
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();  ///< map frame: the height tie-break
@@ -26,39 +26,39 @@ struct SceneGraphObject {
   int stable = -1;
 };
 
-struct SceneGraphNode {
+struct SupportGraphNode {
   int id = -1;
   std::string class_name;
-  /// Ids; SceneGraph::kSupportPlaneId (-1) is the support plane (the table; messages: 0).
+  /// Ids; SupportGraph::kSupportPlaneId (-1) is the support plane (the table; messages: 0).
   std::vector<int> supported_by, supports;
   std::vector<int> leans_on, leaned_on_by;
   std::vector<int> beside;  ///< side-by-side contacts
-  int stable = -1;          ///< as SceneGraphObject::stable
+  int stable = -1;          ///< as SupportGraphObject::stable
   /// Nothing rests or leans on it: taking it disturbs no other object.
   bool free_to_pick = true;
-  int removal_step = -1;  ///< its place in SceneGraph::removal_order (0 first)
+  int removal_step = -1;  ///< its place in SupportGraph::removal_order (0 first)
 };
 
-struct SceneGraph {
+struct SupportGraph {
   static constexpr int kSupportPlaneId = -1;
-  std::vector<SceneGraphNode> nodes;  ///< in the order of the objects given
+  std::vector<SupportGraphNode> nodes;  ///< in the order of the objects given
   std::vector<int> removal_order;     ///< object ids, the first to take first
   /// Cycles of "rests or leans on" (two estimates each on the other): broken by taking the
   /// highest object of the cycle first, each one said here.
   std::vector<std::string> warnings;
   /// The node of an object id, or null.
-  const SceneGraphNode* find(int id) const;
+  const SupportGraphNode* find(int id) const;
 };
 
 /// The graph of `objects` from `contacts` (object_a / object_b index `objects`, -1 the support
 /// plane). A support contact: a supports b. A leaning contact: the object above (along
 /// -gravity, by the contact normal; by the centres when the normal is level) leans on the other.
 /// A side contact: beside each other. Contacts naming an object outside the list are skipped.
-SceneGraph buildSceneGraph(const std::vector<SceneGraphObject>& objects,
+SupportGraph buildSupportGraph(const std::vector<SupportGraphObject>& objects,
                            const std::vector<FeatureContact>& contacts,
                            const Eigen::Vector3d& gravity);
 
 /// "class #id" of an object of the graph ("table" for the support plane, "#id" when unknown).
-std::string sceneGraphName(const SceneGraph& graph, int id);
+std::string supportGraphName(const SupportGraph& graph, int id);
 
 }  // namespace geofusion

@@ -124,6 +124,15 @@ struct GraphContact {
   bool correct = false;  ///< estimated contacts: the true graph has it (pair and kind)
 };
 
+/// A true object on the table that the final map has: the lowest point of its model above the
+/// table the map is judged on (the method's support plane, else the true table), at the true
+/// pose and at the estimate (metres; negative: into the table). Where annotations sink objects
+/// into the table (real frames), an estimate stood on the measured table is higher by as much.
+struct TableClearance {
+  std::string object;  ///< "class #id (true)"
+  double truth_m = 0.0, estimate_m = 0.0;
+};
+
 /// Contacts of one kind in the final map against the truth, as (object pair, kind).
 struct ContactCounts {
   int truth = 0, estimated = 0, correct = 0;
@@ -167,6 +176,8 @@ struct RunEvaluation {
   ContactCounts contacts_by_kind[3];
   std::vector<double> penetration_m;  ///< per touching or intersecting pair (object or table)
   std::vector<double> gap_m;          ///< per true support of a matched object
+  /// Per matched object within 2 cm of the table (truth or estimate).
+  std::vector<TableClearance> table_clearance;
   /// The pairs behind the maxima: "class #id (true|false) / class #id (...)" ("table" for the
   /// table), for finding what makes a map implausible; empty when there is none.
   std::string deepest_pair, widest_gap_pair;
@@ -185,7 +196,7 @@ struct RunEvaluation {
   /// do (the detection's fault). Free to pick: the map's true objects it calls free, of them
   /// free in the truth, and the true objects free in the truth the map has.
   bool has_scene_graph = false;
-  SceneGraph scene_graph;
+  SupportGraph scene_graph;
   int plan_steps = 0, plan_unsafe_steps = 0, plan_steps_under_missed = 0;
   std::string first_unsafe_step;  ///< "took class #id (true) before class #id resting on it"
   int free_predicted = 0, free_correct = 0, free_true = 0;

@@ -40,6 +40,16 @@ struct StabilityConfig {
   double contact_distance_m = 0.002;
 };
 
+/// A numeric setting of StabilityConfig: its key in the `physics` section, its field, its allowed
+/// range and what it means. The one list validate() and the configuration's table read.
+struct StabilitySetting {
+  const char* key;
+  double StabilityConfig::*field;
+  double min, max;
+  const char* doc;
+};
+const std::vector<StabilitySetting>& stabilitySettings();
+
 /// Empty when every setting is in range, else one message per setting out of range (naming it).
 std::vector<std::string> validate(const StabilityConfig& config);
 

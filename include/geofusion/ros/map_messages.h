@@ -4,8 +4,10 @@
 
 #include "geofusion/estimation/relations.h"
 #include "geofusion/estimation/scene_estimator.h"
+#include "geofusion/estimation/scene_graph.h"
 
 #include <geofusion/ObjectMap.h>
+#include <geofusion/SceneGraph.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <std_msgs/Header.h>
 #include <visualization_msgs/MarkerArray.h>
@@ -33,6 +35,10 @@ inline uint32_t messageId(int object_id) {
 
 /// One object (state, covariance with a continuous symmetry's free rotation, symmetry, size).
 geofusion::MapObject toMapObjectMsg(const ObjectEstimate& object);
+
+/// The support graph as a plan (docs/scene_graph.md): ids as in ObjectMap (messageId; the support
+/// plane ContactRelation::SUPPORT_PLANE_ID).
+geofusion::SceneGraph toSceneGraphMsg(const SupportGraph& graph, const std_msgs::Header& header);
 
 geofusion::ObjectMap toObjectMapMsg(const KeyframeResult& result, const SupportPlane& plane,
                                     const Eigen::Vector3d& gravity, const std_msgs::Header& header);

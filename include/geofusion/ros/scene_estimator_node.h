@@ -11,6 +11,7 @@
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
+#include <geofusion/GetSceneGraph.h>
 #include <geofusion/LoadMap.h>
 #include <geofusion/SaveBopResults.h>
 #include <geofusion/SaveMap.h>
@@ -78,6 +79,11 @@ class SceneEstimatorNode {
   bool onSave(geofusion::SaveMap::Request& req, geofusion::SaveMap::Response& res);
   bool onSaveBop(geofusion::SaveBopResults::Request& req, geofusion::SaveBopResults::Response& res);
   bool onReset(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
+  bool onSceneGraph(geofusion::GetSceneGraph::Request& req,
+                    geofusion::GetSceneGraph::Response& res);
+  geofusion::SceneGraph sceneGraphOf(const KeyframeResult& map, const SupportPlane& plane,
+                                     const Eigen::Vector3d& gravity,
+                                     const std_msgs::Header& header) const;
   void onReconfigure(geofusion::SceneEstimatorConfig& config, uint32_t level);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   void diagnoseAutosave(diagnostic_updater::DiagnosticStatusWrapper& status);
@@ -118,6 +124,7 @@ class SceneEstimatorNode {
   tf2_ros::TransformBroadcaster tf_broadcaster_;
   ros::Publisher map_pub_, markers_pub_, path_pub_, background_markers_pub_, background_cloud_pub_;
   ros::Publisher background_octomap_pub_;  // advertised only when built with octomap_msgs
+  ros::Publisher scene_graph_pub_;
   int background_publish_every_ = 5;
   std::atomic<bool> background_by_height_{true};  // node.background_colour, set by reconfigure
   // The object frames of the last keyframe, re-sent at node.object_frames_rate_hz stamped
@@ -126,7 +133,7 @@ class SceneEstimatorNode {
   std::vector<geometry_msgs::TransformStamped> object_frames_;
   ros::Timer object_frames_timer_;
   double object_frames_tolerance_s_ = 0.2;
-  ros::ServiceServer save_srv_, save_bop_srv_, load_srv_, reset_srv_;
+  ros::ServiceServer save_srv_, save_bop_srv_, load_srv_, reset_srv_, scene_graph_srv_;
   diagnostic_updater::Updater diagnostics_;
   ros::WallTimer diagnostics_timer_;
   std::atomic<std::size_t> frames_{0};  // synchronised sets received
