@@ -15,9 +15,9 @@ physics::StabilityResult checkMapStability(const std::vector<ObjectEstimate>& ob
 }
 
 SupportGraph mapSupportGraph(const std::vector<ObjectEstimate>& objects,
-                         const std::vector<FeatureContact>& contacts,
-                         const Eigen::Vector3d& gravity,
-                         const physics::StabilityResult* stability) {
+                             const std::vector<FeatureContact>& contacts,
+                             const Eigen::Vector3d& gravity,
+                             const physics::StabilityResult* stability) {
   std::vector<SupportGraphObject> list;
   list.reserve(objects.size());
   for (const ObjectEstimate& o : objects) {

@@ -53,7 +53,8 @@ void addRelation(const std::vector<SupportGraphObject>& objects, const FeatureCo
 
 // Whether object i goes before j among those free to take: seen better, then higher, then the
 // lower id.
-bool takenBefore(const SupportGraphObject& i, const SupportGraphObject& j, const Eigen::Vector3d& up) {
+bool takenBefore(const SupportGraphObject& i, const SupportGraphObject& j,
+                 const Eigen::Vector3d& up) {
   if (i.visibility != j.visibility) return i.visibility > j.visibility;
   const double hi = i.centre.dot(up), hj = j.centre.dot(up);
   if (hi != hj) return hi > hj;
@@ -88,9 +89,10 @@ void orderRemovals(const std::vector<SupportGraphObject>& objects, const Eigen::
             objects[i].centre.dot(up) > objects[static_cast<std::size_t>(best)].centre.dot(up))
           best = static_cast<int>(i);
       }
-      graph->warnings.push_back("objects rest or lean on each other in a cycle: " +
-                                supportGraphName(*graph, objects[static_cast<std::size_t>(best)].id) +
-                                ", the highest of them, is taken first");
+      graph->warnings.push_back(
+          "objects rest or lean on each other in a cycle: " +
+          supportGraphName(*graph, objects[static_cast<std::size_t>(best)].id) +
+          ", the highest of them, is taken first");
     }
     taken[static_cast<std::size_t>(best)] = true;
     graph->nodes[static_cast<std::size_t>(best)].removal_step = static_cast<int>(step);
@@ -114,8 +116,8 @@ std::string supportGraphName(const SupportGraph& graph, int id) {
 }
 
 SupportGraph buildSupportGraph(const std::vector<SupportGraphObject>& objects,
-                           const std::vector<FeatureContact>& contacts,
-                           const Eigen::Vector3d& gravity) {
+                               const std::vector<FeatureContact>& contacts,
+                               const Eigen::Vector3d& gravity) {
   SupportGraph graph;
   const Eigen::Vector3d up =
       gravity.norm() > 0.0 ? Eigen::Vector3d(-gravity.normalized()) : Eigen::Vector3d::UnitZ();

@@ -503,7 +503,7 @@ geofusion::physics::StabilityResult checkFinalMap(const geofusion::GeoFusionConf
       checkMapStability(results->final_map.objects, &results->support_plane,
                         config.estimator.gravity, config.physics);
   results->scene_graph = mapSupportGraph(results->final_map.objects, results->final_map.contacts,
-                                       config.estimator.gravity, &s);
+                                         config.estimator.gravity, &s);
   results->has_scene_graph = true;
   return s;
 }
@@ -514,7 +514,7 @@ void printStability(const geofusion::GeoFusionConfig& config, const geofusion::R
   using namespace geofusion;
   auto name = [&](int id) {
     return supportGraphName(results.scene_graph,
-                          id == physics::kPlaneId ? SupportGraph::kSupportPlaneId : id);
+                            id == physics::kPlaneId ? SupportGraph::kSupportPlaneId : id);
   };
   std::printf(
       "run_offline: stability (%.1f s of gravity): %d of %d objects stable, %d more start "

@@ -66,18 +66,19 @@ TEST(SupportGraph, RelationsFreeObjectsAndATopFirstOrder) {
 TEST(SupportGraph, LevelLeaningUsesHeightsAndACycleIsBrokenAtTheTop) {
   // A leaning contact whose normal is level (from markLeaning): the higher object leans. The
   // normal runs from a (the higher one) to b, so only the centres can say.
-  const std::vector<SupportGraphObject> objects = {object(1, "board", 0.12), object(2, "box", 0.04)};
+  const std::vector<SupportGraphObject> objects = {object(1, "board", 0.12),
+                                                   object(2, "box", 0.04)};
   const SupportGraph lean =
       buildSupportGraph(objects, {contact(0, 1, ContactKind::kLeaning, Eigen::Vector3d::UnitX())},
-                      Eigen::Vector3d(0, 0, -1));
+                        Eigen::Vector3d(0, 0, -1));
   EXPECT_EQ(lean.find(1)->leans_on, std::vector<int>{2});
   EXPECT_EQ(lean.removal_order, (std::vector<int>{1, 2}));
   // Two estimates each holding the other up (a wrong map): a cycle, said, the higher taken first.
   const SupportGraph cycle =
       buildSupportGraph(objects,
-                      {contact(0, 1, ContactKind::kSupport), contact(1, 0, ContactKind::kSupport),
-                       contact(5, 0, ContactKind::kSupport)},  // names no object: skipped
-                      Eigen::Vector3d(0, 0, -1));
+                        {contact(0, 1, ContactKind::kSupport), contact(1, 0, ContactKind::kSupport),
+                         contact(5, 0, ContactKind::kSupport)},  // names no object: skipped
+                        Eigen::Vector3d(0, 0, -1));
   EXPECT_FALSE(cycle.find(1)->free_to_pick);
   EXPECT_FALSE(cycle.find(2)->free_to_pick);
   EXPECT_EQ(cycle.removal_order, (std::vector<int>{1, 2}));
@@ -117,8 +118,9 @@ TEST(SupportGraph, TheGeneratorsStacksComeApartSafelyInPlanOrder) {
   ASSERT_EQ(g.removal_order.size(), scene.objects.size());
   EXPECT_TRUE(g.warnings.empty());
   // A supporter of something: taking it first makes what it held move.
-  const auto supporter = std::find_if(g.nodes.begin(), g.nodes.end(),
-                                      [](const SupportGraphNode& n) { return !n.supports.empty(); });
+  const auto supporter =
+      std::find_if(g.nodes.begin(), g.nodes.end(),
+                   [](const SupportGraphNode& n) { return !n.supports.empty(); });
   ASSERT_NE(supporter, g.nodes.end()) << "seed " << seed << " made no stack";
   EXPECT_GT(largestMotionWithout(scene, {supporter->id}), 0.005)
       << supportGraphName(g, supporter->id);

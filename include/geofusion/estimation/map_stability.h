@@ -22,7 +22,8 @@ physics::StabilityResult checkMapStability(const std::vector<ObjectEstimate>& ob
 /// score is what the robot sees best, the centre the model box's; whether each object stands
 /// comes from `stability` when given (its check of the same objects).
 SupportGraph mapSupportGraph(const std::vector<ObjectEstimate>& objects,
-                         const std::vector<FeatureContact>& contacts,
-                         const Eigen::Vector3d& gravity, const physics::StabilityResult* stability);
+                             const std::vector<FeatureContact>& contacts,
+                             const Eigen::Vector3d& gravity,
+                             const physics::StabilityResult* stability);
 
 }  // namespace geofusion

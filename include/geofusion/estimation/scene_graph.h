@@ -42,7 +42,7 @@ struct SupportGraphNode {
 struct SupportGraph {
   static constexpr int kSupportPlaneId = -1;
   std::vector<SupportGraphNode> nodes;  ///< in the order of the objects given
-  std::vector<int> removal_order;     ///< object ids, the first to take first
+  std::vector<int> removal_order;       ///< object ids, the first to take first
   /// Cycles of "rests or leans on" (two estimates each on the other): broken by taking the
   /// highest object of the cycle first, each one said here.
   std::vector<std::string> warnings;
@@ -55,8 +55,8 @@ struct SupportGraph {
 /// -gravity, by the contact normal; by the centres when the normal is level) leans on the other.
 /// A side contact: beside each other. Contacts naming an object outside the list are skipped.
 SupportGraph buildSupportGraph(const std::vector<SupportGraphObject>& objects,
-                           const std::vector<FeatureContact>& contacts,
-                           const Eigen::Vector3d& gravity);
+                               const std::vector<FeatureContact>& contacts,
+                               const Eigen::Vector3d& gravity);
 
 /// "class #id" of an object of the graph ("table" for the support plane, "#id" when unknown).
 std::string supportGraphName(const SupportGraph& graph, int id);
