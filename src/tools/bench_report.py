@@ -1133,7 +1133,7 @@ def stability_section(methods):
     t = have[0][1]
     rows.append(['ground truth', '%d / %d' % (t['stability_truth_stable'], t['stability_truth_objects']),
                  _num(t['stability_truth_share'], 3), '-', '-', '-', '-', '-'])
-    return _table(['method', 'true objects stable', 'share', 'start interpenetrating',
+    return md + _table(['method', 'true objects stable', 'share', 'start interpenetrating',
                    'motion mean (mm)', 'motion max (mm)', 'turn max (deg)', 'least stable pair'],
                   rows) + ['']
 
@@ -1153,7 +1153,7 @@ def plan_section(methods):
              _num(m['plan_unsafe_per_scene'], 2), str(m['plan_steps_under_missed']),
              '%d / %d' % (m['free_correct'], m['free_predicted']), _num(m['free_precision'], 3),
              m['plan_first_unsafe'] or '-'] for n, m in have]
-    return _table(['method', 'steps (true objects)', 'unsafe', 'unsafe per scene',
+    return md + _table(['method', 'steps (true objects)', 'unsafe', 'unsafe per scene',
                    'under a missed object', 'free right / called free', 'free precision',
                    'first unsafe step'], rows) + ['']
 

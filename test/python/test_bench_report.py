@@ -356,6 +356,7 @@ class PersistentErrorMetricsTest(unittest.TestCase):
         section = '\n'.join(bench_report.plan_section(
             {'GeoFusion': summary['GeoFusion'], 'FbF': summary['FbF']}))
         self.assertIn('| GeoFusion | 6 | 2 | 1.00 | 2 | 3 / 5 | 0.600 |', section)
+        self.assertTrue(section.startswith('## The support graph as a plan'), section)
         self.assertNotIn('plan: GeoFusion 0 unsafe removal steps of true objects',
                          {t['target'] for t in bench_report.summarize(
                              evals, 'bench_iid', 'x')['targets']})
