@@ -64,6 +64,29 @@ std::string describeContact(const geofusion::ContactRelation& c, uint32_t object
   return (c.kind == geofusion::ContactRelation::KIND_LEANING ? "leans on " : "rests on ") + name;
 }
 
+PlanCells planCells(const geofusion::SceneGraph& graph, uint32_t id) {
+  PlanCells cells;
+  for (const geofusion::SceneGraphObject& o : graph.objects) {
+    if (o.id != id) continue;
+    if (o.removal_step >= 0) cells.take = std::to_string(o.removal_step + 1);
+    if (o.free_to_pick) {
+      cells.free = "free";
+    } else {
+      std::string above;
+      for (const auto* list : {&o.supports, &o.leaned_on_by})
+        for (uint32_t other : *list) above += (above.empty() ? "" : ", ") + std::to_string(other);
+      cells.free = "under " + above;
+    }
+  }
+  return cells;
+}
+
+std::string sceneGraphTopicFor(const std::string& object_map_topic) {
+  const std::size_t slash = object_map_topic.rfind('/');
+  return (slash == std::string::npos ? std::string() : object_map_topic.substr(0, slash + 1)) +
+         "scene_graph";
+}
+
 const geofusion::MapObject* findObject(const geofusion::ObjectMap& map, uint32_t id) {
   for (const auto* list : {&map.objects, &map.tentative})
     for (const auto& o : *list)

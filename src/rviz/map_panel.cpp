@@ -61,7 +61,8 @@ std::string saveService(const std::string& map_topic) {
 
 MapPanel::MapPanel(QWidget* parent) : rviz::Panel(parent) {
   topic_ = new QLineEdit(kDefaultTopic);
-  objects_ = makeTable({"id", "class", "state", "seen", "σ pos mm", "σ rot deg"}, this);
+  objects_ =
+      makeTable({"id", "class", "state", "seen", "σ pos mm", "σ rot deg", "take", "free"}, this);
   contacts_ = makeTable({"a", "b", "kind", "type", "gap mm"}, this);
   save_path_ = new QLineEdit(QString::fromStdString(
       std::string(std::getenv("HOME") ? std::getenv("HOME") : "/tmp") + "/geofusion_map"));
@@ -121,6 +122,11 @@ void MapPanel::subscribe() {
   const std::string topic = topic_->text().trimmed().toStdString();
   if (!map_sub_ || map_sub_.getTopic() != ros::names::resolve(topic)) {
     map_sub_ = topic.empty() ? ros::Subscriber() : nh_.subscribe(topic, 1, &MapPanel::onMap, this);
+    // The plan beside the map (~scene_graph): the removal order and the free objects.
+    graph_.reset();
+    graph_sub_ = topic.empty() ? ros::Subscriber()
+                               : nh_.subscribe(sceneGraphTopicFor(ros::names::resolve(topic)), 1,
+                                               &MapPanel::onGraph, this);
     status_->setText(QString("waiting for %1").arg(QString::fromStdString(topic)));
   }
 }
@@ -136,6 +142,11 @@ void MapPanel::onMap(const geofusion::ObjectMap::ConstPtr& map) {
                        .arg(map_->contacts.size()));
 }
 
+void MapPanel::onGraph(const geofusion::SceneGraph::ConstPtr& graph) {
+  graph_ = graph;
+  if (map_) fillObjects();
+}
+
 void MapPanel::fillObjects() {
   filling_ = true;
   objects_->setRowCount(static_cast<int>(map_->objects.size() + map_->tentative.size()));
@@ -143,12 +154,14 @@ void MapPanel::fillObjects() {
   for (const auto* list : {&map_->objects, &map_->tentative}) {
     for (const auto& o : *list) {
       const PoseSpread spread = poseSpread(o);
+      const PlanCells plan = graph_ ? planCells(*graph_, o.id) : PlanCells();
       setRow(
           objects_, row,
           {QString::number(o.id), QString::fromStdString(o.class_name),
            o.state == geofusion::MapObject::STATE_CONFIRMED ? "confirmed" : "tentative",
            QString::number(o.num_measurements), QString::number(1000.0 * spread.position_m, 'f', 1),
-           QString::number(spread.rotation_rad * 180.0 / M_PI, 'f', 1)});
+           QString::number(spread.rotation_rad * 180.0 / M_PI, 'f', 1),
+           QString::fromStdString(plan.take), QString::fromStdString(plan.free)});
       if (o.id == selected_) objects_->selectRow(row);
       ++row;
     }

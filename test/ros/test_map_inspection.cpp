@@ -88,6 +88,28 @@ TEST(MapInspection, SelectionHighlightsTheObjectAndItsContacts) {
   EXPECT_EQ(selectionMarkers(map, 4).markers.size(), 2u);
 }
 
+TEST(MapInspection, PlanCellsSayTheOrderAndWhatRestsOnAnObject) {
+  geofusion::SceneGraph graph;
+  geofusion::SceneGraphObject box, mug;
+  box.id = 3;
+  box.removal_step = 1;
+  box.free_to_pick = false;
+  box.supports = {5};
+  box.leaned_on_by = {7};
+  mug.id = 5;
+  mug.removal_step = 0;
+  mug.free_to_pick = true;
+  graph.objects = {box, mug};
+  EXPECT_EQ(planCells(graph, 3).take, "2");
+  EXPECT_EQ(planCells(graph, 3).free, "under 5, 7");
+  EXPECT_EQ(planCells(graph, 5).take, "1");
+  EXPECT_EQ(planCells(graph, 5).free, "free");
+  EXPECT_EQ(planCells(graph, 9).take, "-");  // not in the plan (yet)
+  EXPECT_EQ(planCells(graph, 9).free, "");
+  EXPECT_EQ(sceneGraphTopicFor("/scene_estimator/object_map"), "/scene_estimator/scene_graph");
+  EXPECT_EQ(sceneGraphTopicFor("object_map"), "scene_graph");
+}
+
 TEST(MapInspection, PoseSpreadLeavesOutTheFreeRotation) {
   auto can = object(2, 0, 0, 0.15);
   can.pose.covariance[0] = 4e-6;   // 2 mm in x

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <geofusion/ObjectMap.h>
+#include <geofusion/SceneGraph.h>
 #include <std_msgs/Header.h>
 #include <visualization_msgs/MarkerArray.h>
 
@@ -29,6 +30,19 @@ std::string contactTypeName(uint8_t type);
 /// One contact seen from `object_id`: "rests on 3", "supports 5", "leans on the table",
 /// "beside 7".
 std::string describeContact(const geofusion::ContactRelation& contact, uint32_t object_id);
+
+/// The plan's cells of an object for the panel (geofusion/SceneGraph, docs/scene_graph.md):
+/// "take" is its place in the removal order from 1 ("-" when the plan does not have it), "free"
+/// says "free" when nothing rests or leans on it, else what does ("under 5, 7").
+struct PlanCells {
+  std::string take = "-";
+  std::string free;
+};
+PlanCells planCells(const geofusion::SceneGraph& graph, uint32_t id);
+
+/// The scene graph topic beside an ObjectMap topic: "/scene_estimator/object_map" ->
+/// "/scene_estimator/scene_graph".
+std::string sceneGraphTopicFor(const std::string& object_map_topic);
 
 /// The object with `id` among the map's objects or tentative ones, or null.
 const geofusion::MapObject* findObject(const geofusion::ObjectMap& map, uint32_t id);
