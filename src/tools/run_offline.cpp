@@ -497,29 +497,33 @@ bool writeOutputs(const Options& opt, geofusion::EstimatorPipeline* pipeline,
 // The final map under gravity on its support plane (physics/stability.h), and its support graph
 // as a plan with the check's verdicts (scene_graph.h; written with the results).
 geofusion::physics::StabilityResult checkFinalMap(const geofusion::GeoFusionConfig& config,
-                                                  geofusion::RunResults* results) {
+                                                  geofusion::RunResults* results,
+                                                  double* check_ms) {
   using namespace geofusion;
+  const auto start = std::chrono::steady_clock::now();
   physics::StabilityResult s =
       checkMapStability(results->final_map.objects, &results->support_plane,
                         config.estimator.gravity, config.physics);
   results->scene_graph = mapSupportGraph(results->final_map.objects, results->final_map.contacts,
                                          config.estimator.gravity, &s);
   results->has_scene_graph = true;
+  *check_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return s;
 }
 
 // Would the final map stand? And what can be taken first?
 void printStability(const geofusion::GeoFusionConfig& config, const geofusion::RunResults& results,
-                    const geofusion::physics::StabilityResult& s) {
+                    const geofusion::physics::StabilityResult& s, double check_ms) {
   using namespace geofusion;
   auto name = [&](int id) {
     return supportGraphName(results.scene_graph,
                             id == physics::kPlaneId ? SupportGraph::kSupportPlaneId : id);
   };
   std::printf(
-      "run_offline: stability (%.1f s of gravity): %d of %d objects stable, %d more start "
-      "interpenetrating; motion %.1f mm mean, %.1f mm / %.1f deg max",
-      config.physics.duration_s, s.stable, s.checked, s.interpenetrating,
+      "run_offline: stability (%.1f s of gravity, checked in %.0f ms): %d of %d objects stable, "
+      "%d more start interpenetrating; motion %.1f mm mean, %.1f mm / %.1f deg max",
+      config.physics.duration_s, check_ms, s.stable, s.checked, s.interpenetrating,
       1000 * s.mean_translation_m, 1000 * s.max_translation_m, s.max_rotation_deg);
   if (s.least_stable_pair.first != -1) {
     std::printf("; least stable pair %s / %s (%.1f mm)", name(s.least_stable_pair.first).c_str(),
@@ -542,7 +546,7 @@ void printStability(const geofusion::GeoFusionConfig& config, const geofusion::R
 void printSummary(const Options& opt, const geofusion::GeoFusionConfig& config,
                   const geofusion::VisionDetectionConverter& vision,
                   const geofusion::RunResults& results, std::size_t occupied,
-                  const geofusion::physics::StabilityResult& stability,
+                  const geofusion::physics::StabilityResult& stability, double check_ms,
                   geofusion::EstimatorPipeline* pipeline) {
   using namespace geofusion;
   if (pipeline->background()) {
@@ -563,7 +567,7 @@ void printSummary(const Options& opt, const geofusion::GeoFusionConfig& config,
       results.final_map.contacts.size(), results.wall_time_s, duration,
       duration > 0 ? results.wall_time_s / duration : 0.0, opt.out.c_str());
   std::printf("run_offline: detections: %s\n", pipeline->tally().summary().c_str());
-  printStability(config, results, stability);
+  printStability(config, results, stability, check_ms);
   std::printf("run_offline: objects removed: %s; relocalisation searched: %s\n",
               reasonsLine(removalsByReason(results)).c_str(),
               reasonsLine(relocalisationsByDecision(results)).c_str());
@@ -669,10 +673,11 @@ int main(int argc, char** argv) {
     return 1;
   }
   finishResults(&pipeline, start, &results);
-  const physics::StabilityResult stability = checkFinalMap(config, &results);
+  double check_ms = 0.0;
+  const physics::StabilityResult stability = checkFinalMap(config, &results, &check_ms);
   std::size_t occupied = 0;
   if (!writeOutputs(opt, &pipeline, &results, &occupied, &error)) return 1;
-  printSummary(opt, config, vision, results, occupied, stability, &pipeline);
+  printSummary(opt, config, vision, results, occupied, stability, check_ms, &pipeline);
   printWarnings(opt, config, pipeline, results);
   return 0;
 }

@@ -88,6 +88,9 @@ class EstimatorReplayTest(unittest.TestCase):
         self.assertTrue(topic, 'nothing on ~scene_graph while listening')
         self.assertEqual(sorted(o.id for o in topic[-1].objects),
                          sorted(o.id for o in self.maps[-1].objects))
+        # The topic's plan leaves stability to the service (a second of simulation).
+        self.assertTrue(all(o.stable == -1 for o in topic[-1].objects))
+        self.assertEqual(topic[-1].removal_order, graph.removal_order)
 
     def on_map(self, msg):
         with self.lock:

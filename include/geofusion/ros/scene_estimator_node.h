@@ -82,8 +82,8 @@ class SceneEstimatorNode {
   bool onSceneGraph(geofusion::GetSceneGraph::Request& req,
                     geofusion::GetSceneGraph::Response& res);
   geofusion::SceneGraph sceneGraphOf(const KeyframeResult& map, const SupportPlane& plane,
-                                     const Eigen::Vector3d& gravity,
-                                     const std_msgs::Header& header) const;
+                                     const Eigen::Vector3d& gravity, const std_msgs::Header& header,
+                                     bool check_stability) const;
   void onReconfigure(geofusion::SceneEstimatorConfig& config, uint32_t level);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   void diagnoseAutosave(diagnostic_updater::DiagnosticStatusWrapper& status);
