@@ -239,13 +239,16 @@ void SceneEstimatorNode::startFrames() {
 
 SceneEstimatorNode::~SceneEstimatorNode() {
   diagnostics_timer_.stop();  // its callbacks read the autosaver, reset below
-  subscriber_.reset();
+  // The frame thread first: it reads the subscriber (newestStamp). Resetting the subscriber
+  // before the join was a use-after-free window at unload (ThreadSanitizer, 2026-12-05).
+  // Frames the subscriber still hands over meanwhile wait in the queue, unprocessed.
   {
     std::lock_guard<std::mutex> lock(queue_mutex_);
     stop_frames_ = true;
   }
   queue_cv_.notify_all();
   if (frame_thread_.joinable()) frame_thread_.join();
+  subscriber_.reset();
   object_frames_timer_.stop();
   // No background publication in flight once this returns (the listener runs under its lock).
   if (pipeline_ && pipeline_->background()) pipeline_->background()->setListener(nullptr);
