@@ -118,7 +118,6 @@ int orderAbout(const Symmetry& symmetry, const Eigen::Vector3d& axis) {
   return n;
 }
 
-#if !GEOFUSION_HAVE_MESHOPTIMIZER
 namespace {
 
 // The points of `points` furthest along `count` directions spread evenly over the sphere (a
@@ -144,22 +143,28 @@ std::vector<Eigen::Vector3f> supportPoints(const std::vector<Eigen::Vector3f>& p
 }
 
 }  // namespace
-#endif
 
-TriangleMesh collisionHull(const TriangleMesh& mesh) {
-  TriangleMesh hull = convexHull(simplifyMesh(mesh, 400, 0.002).vertices);
-#if !GEOFUSION_HAVE_MESHOPTIMIZER
-  // Built without meshoptimizer (Ubuntu 20.04) the mesh is not simplified, and the hull of every
-  // vertex of a scanned model has hundreds to thousands of vertices: Bullet's contacts on such a
-  // hull jitter, so generated scenes do not settle and settled ones do not stand. Its vertex count
-  // is bounded as the simplification bounds it (docs/platforms.md).
+namespace {
+
+// The hull of `points`, cut down to its support points along 400 directions when it has more:
+// Bullet's contacts on a hull of thousands of vertices jitter.
+TriangleMesh boundedHull(const std::vector<Eigen::Vector3f>& points) {
   constexpr int kDirections = 400;
+  TriangleMesh hull = convexHull(points);
   if (hull.vertices.size() > std::size_t(kDirections)) {
     TriangleMesh bounded = convexHull(supportPoints(hull.vertices, kDirections));
     if (!bounded.empty()) hull = std::move(bounded);
   }
-#endif
   return hull;
+}
+
+}  // namespace
+
+TriangleMesh collisionHull(const TriangleMesh& mesh) {
+  // One hull on every build, from the full mesh. It was once the hull of the meshoptimizer-
+  // simplified mesh, which differs between meshoptimizer releases (0.15 on Debian 11 kept 0.945
+  // of the scissors' volume) and is missing on Ubuntu 20.04 (docs/platforms.md).
+  return boundedHull(mesh.vertices);
 }
 
 namespace {
@@ -196,7 +201,7 @@ void addParts(const std::vector<Eigen::Vector3f>& points, TriangleMesh hull, int
   if (depth_left > 0 && points.size() >= 40 && volume > 0.0) {
     std::vector<Eigen::Vector3f> lower, upper;
     splitAcrossLongestAxis(points, 0.001f, &lower, &upper);
-    TriangleMesh lower_hull = convexHull(lower), upper_hull = convexHull(upper);
+    TriangleMesh lower_hull = boundedHull(lower), upper_hull = boundedHull(upper);
     if (!lower_hull.empty() && !upper_hull.empty() &&
         enclosedVolume(lower_hull) + enclosedVolume(upper_hull) < fill * volume) {
       addParts(lower, std::move(lower_hull), depth_left - 1, fill, parts);
@@ -212,9 +217,9 @@ void addParts(const std::vector<Eigen::Vector3f>& points, TriangleMesh hull, int
 std::vector<TriangleMesh> collisionParts(const TriangleMesh& mesh, const TriangleMesh& hull,
                                          int max_depth, double fill) {
   if (hull.empty() || mesh.empty()) return {hull};
-  const TriangleMesh light = simplifyMesh(mesh, 400, 0.002);
-  std::vector<Eigen::Vector3f> points = light.vertices;
-  const std::vector<Eigen::Vector3f> samples = sampleSurfacePoints(light, 3000, 11);
+  // The full mesh, as collisionHull: the same parts on every build (docs/platforms.md).
+  std::vector<Eigen::Vector3f> points = mesh.vertices;
+  const std::vector<Eigen::Vector3f> samples = sampleSurfacePoints(mesh, 3000, 11);
   points.insert(points.end(), samples.begin(), samples.end());
   // Starting from the collision hull: where it fits, it is the one part (the shape the other
   // checks use).

@@ -58,7 +58,8 @@ struct ObjectModel {
   /// The mesh's axis-aligned box, model frame (ModelSet::add fills it; empty: boxOf measures the
   /// mesh).
   Eigen::AlignedBox3f box;
-  /// Convex hull of a simplified mesh: the shape physics (Bullet) and collision checks (FCL) use.
+  /// Convex hull of the mesh (collisionHull): the shape physics (Bullet) and collision checks (FCL)
+  /// use.
   TriangleMesh collision_hull;
   /// Convex parts whose union covers the shape (collisionParts): what a merge's interpenetration
   /// is measured on. One part, the collision hull, for a model its hull fits.
@@ -69,15 +70,16 @@ struct ObjectModel {
 /// stored (a model built by hand).
 Eigen::AlignedBox3f boxOf(const ObjectModel& model);
 
-/// The convex collision hull ObjectModel::collision_hull holds (hull of a <= 400-triangle,
-/// <= 2 mm simplification of the mesh).
+/// The convex collision hull ObjectModel::collision_hull holds: the hull of the mesh's vertices,
+/// cut down to its support points along 400 directions when it has more (the same on every
+/// build, with or without meshoptimizer).
 TriangleMesh collisionHull(const TriangleMesh& mesh);
 
 /// A convex decomposition of a concave model, made once per model (ModelSet::add): the surface
-/// (points of the <= 400-triangle simplification and samples of it) is cut in two across its
-/// longest principal axis, each half's hull kept, and each half cut again while the halves'
-/// hulls fill less than `fill` of their parent's volume, to at most 2^max_depth parts (halves
-/// overlap by 1 mm so that their union covers the surface). A model its hull fits (a box, a
+/// (the mesh's vertices and 3000 samples of it) is cut in two across its longest principal
+/// axis, each half's hull kept (bounded as collisionHull's), and each half cut again while the
+/// halves' hulls fill less than `fill` of their parent's volume, to at most 2^max_depth parts
+/// (halves overlap by 1 mm so that their union covers the surface). A model its hull fits (a box, a
 /// can) keeps one part: `hull` itself.
 std::vector<TriangleMesh> collisionParts(const TriangleMesh& mesh, const TriangleMesh& hull,
                                          int max_depth = 3, double fill = 0.95);
