@@ -2,16 +2,41 @@
 
 namespace geofusion {
 
+namespace {
+
+std::vector<physics::StabilityBody> bodiesOf(const std::vector<ObjectEstimate>& objects) {
+  std::vector<physics::StabilityBody> bodies;
+  bodies.reserve(objects.size());
+  for (const ObjectEstimate& o : objects) bodies.push_back({o.id, o.model, o.T_map_obj});
+  return bodies;
+}
+
+/// The map's plane as the physics module's; false when there is none.
+bool planeOf(const SupportPlane* plane, physics::StabilityPlane* out) {
+  if (!plane || !plane->valid) return false;
+  *out = physics::StabilityPlane{plane->normal, plane->height};
+  return true;
+}
+
+}  // namespace
+
 physics::StabilityResult checkMapStability(const std::vector<ObjectEstimate>& objects,
                                            const SupportPlane* plane,
                                            const Eigen::Vector3d& gravity,
                                            const physics::StabilityConfig& config) {
-  std::vector<physics::StabilityBody> bodies;
-  bodies.reserve(objects.size());
-  for (const ObjectEstimate& o : objects) bodies.push_back({o.id, o.model, o.T_map_obj});
-  if (!plane || !plane->valid) return physics::checkStability(bodies, nullptr, gravity, config);
-  const physics::StabilityPlane support{plane->normal, plane->height};
-  return physics::checkStability(bodies, &support, gravity, config);
+  physics::StabilityPlane support;
+  const bool has_plane = planeOf(plane, &support);
+  return physics::checkStability(bodiesOf(objects), has_plane ? &support : nullptr, gravity,
+                                 config);
+}
+
+bool exportMapScene(const std::vector<ObjectEstimate>& objects, const SupportPlane* plane,
+                    const Eigen::Vector3d& gravity, const physics::StabilityConfig& config,
+                    const std::string& folder, physics::SceneExport* result, std::string* error) {
+  physics::StabilityPlane support;
+  const bool has_plane = planeOf(plane, &support);
+  return physics::exportScene(bodiesOf(objects), has_plane ? &support : nullptr, gravity, config,
+                              folder, result, error);
 }
 
 SupportGraph mapSupportGraph(const std::vector<ObjectEstimate>& objects,

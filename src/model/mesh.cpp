@@ -6,6 +6,7 @@ extern "C" {
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <Eigen/Geometry>
+#include <assimp/Exporter.hpp>
 #include <assimp/Importer.hpp>
 
 #if GEOFUSION_HAVE_MESHOPTIMIZER
@@ -109,6 +110,46 @@ TriangleMesh makeCylinder(double radius, double height, int segments) {
 
 void scaleMesh(double scale, TriangleMesh* mesh) {
   for (auto& v : mesh->vertices) v *= static_cast<float>(scale);
+}
+
+bool saveMesh(const std::string& path, const TriangleMesh& mesh, const std::string& format,
+              std::string* error) {
+  if (mesh.empty()) {
+    *error = "mesh for '" + path + "' has no triangles";
+    return false;
+  }
+  // One mesh, one default material, one node: the scene owns (and frees) every array.
+  aiScene scene;
+  scene.mRootNode = new aiNode();
+  scene.mRootNode->mMeshes = new unsigned int[1]{0};
+  scene.mRootNode->mNumMeshes = 1;
+  scene.mMaterials = new aiMaterial* [1] { new aiMaterial() };
+  scene.mNumMaterials = 1;
+  aiMesh* out = new aiMesh();
+  scene.mMeshes = new aiMesh* [1] { out };
+  scene.mNumMeshes = 1;
+  out->mMaterialIndex = 0;
+  out->mPrimitiveTypes = aiPrimitiveType_TRIANGLE;
+  out->mNumVertices = static_cast<unsigned int>(mesh.vertices.size());
+  out->mVertices = new aiVector3D[mesh.vertices.size()];
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+    out->mVertices[i] =
+        aiVector3D(mesh.vertices[i].x(), mesh.vertices[i].y(), mesh.vertices[i].z());
+  out->mNumFaces = static_cast<unsigned int>(mesh.triangles.size());
+  out->mFaces = new aiFace[mesh.triangles.size()];
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    aiFace& face = out->mFaces[f];
+    face.mNumIndices = 3;
+    face.mIndices = new unsigned int[3];
+    for (int k = 0; k < 3; ++k) face.mIndices[k] = static_cast<unsigned int>(mesh.triangles[f][k]);
+  }
+  Assimp::Exporter exporter;
+  if (exporter.Export(&scene, format, path) != AI_SUCCESS) {
+    *error = "mesh file '" + path + "' could not be written (" + format +
+             "): " + exporter.GetErrorString();
+    return false;
+  }
+  return true;
 }
 
 bool loadMesh(const std::string& path, TriangleMesh* mesh, std::string* error) {

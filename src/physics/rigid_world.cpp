@@ -72,6 +72,31 @@ TriangleMesh shrunkByMargin(const TriangleMesh& hull, double margin) {
   return out;
 }
 
+/// A compound body's shapes in the model frame: each hull moved inwards by the margin, each as
+/// heavy as its volume (density x volume), and Bullet's centre of mass, principal axes and
+/// inertia of the whole (each hull's box approximation moved to the centre). What the stability
+/// check simulates and what an exported scene declares (compoundMassProperties).
+struct ModelFrameCompound {
+  ModelFrameCompound(const std::vector<TriangleMesh>& shapes, double density_kg_m3) {
+    std::vector<btScalar> masses;
+    btTransform identity;
+    identity.setIdentity();
+    for (const TriangleMesh& s : shapes) {
+      hulls.push_back(hullShape(shrunkByMargin(s, kHullMargin), Eigen::Vector3f::Zero()));
+      shape.addChildShape(identity, hulls.back().get());
+      masses.push_back(btScalar(density_kg_m3 * std::max(enclosedVolume(s), 1e-9)));
+      mass += masses.back();
+    }
+    principal.setIdentity();
+    if (!masses.empty()) shape.calculatePrincipalAxisTransform(masses.data(), principal, inertia);
+  }
+  std::vector<std::unique_ptr<btConvexHullShape>> hulls;
+  btCompoundShape shape{false};
+  btScalar mass = 0;
+  btTransform principal;
+  btVector3 inertia{0, 0, 0};
+};
+
 }  // namespace
 
 struct RigidWorld::Impl {
@@ -103,25 +128,16 @@ struct RigidWorld::Impl {
   // Mass 0 in the options: a compound of every shape, each as heavy as its volume.
   void makeCompound(const std::vector<TriangleMesh>& shapes, const RigidBodyOptions& o, Body* b,
                     btScalar* mass, btVector3* inertia) {
-    btCompoundShape in_model_frame(false);
-    std::vector<btScalar> masses;
-    btTransform identity;
-    identity.setIdentity();
-    for (const TriangleMesh& s : shapes) {
-      b->hulls.push_back(hullShape(shrunkByMargin(s, kHullMargin), Eigen::Vector3f::Zero()));
-      in_model_frame.addChildShape(identity, b->hulls.back().get());
-      masses.push_back(btScalar(o.density_kg_m3 * std::max(enclosedVolume(s), 1e-9)));
-    }
-    btTransform principal;
-    in_model_frame.calculatePrincipalAxisTransform(masses.data(), principal, *inertia);
-    b->T_obj_body = fromBullet(principal);
+    ModelFrameCompound in_model_frame(shapes, o.density_kg_m3);
+    *inertia = in_model_frame.inertia;
+    *mass = in_model_frame.mass;
+    b->T_obj_body = fromBullet(in_model_frame.principal);
     b->compound = std::make_unique<btCompoundShape>(false);
-    const btTransform body_from_model = principal.inverse();
-    for (int i = 0; i < in_model_frame.getNumChildShapes(); ++i)
-      b->compound->addChildShape(body_from_model * in_model_frame.getChildTransform(i),
-                                 in_model_frame.getChildShape(i));
-    *mass = 0;
-    for (btScalar m : masses) *mass += m;
+    const btTransform body_from_model = in_model_frame.principal.inverse();
+    for (int i = 0; i < in_model_frame.shape.getNumChildShapes(); ++i)
+      b->compound->addChildShape(body_from_model * in_model_frame.shape.getChildTransform(i),
+                                 in_model_frame.shape.getChildShape(i));
+    for (auto& hull : in_model_frame.hulls) b->hulls.push_back(std::move(hull));
   }
 
   btDefaultCollisionConfiguration collision_config;
@@ -221,6 +237,17 @@ Eigen::Vector3d RigidWorld::centreOfMass(std::size_t index) const {
   btTransform t;
   impl_->bodies[index].state->getWorldTransform(t);
   return Eigen::Vector3d(t.getOrigin().x(), t.getOrigin().y(), t.getOrigin().z());
+}
+
+MassProperties compoundMassProperties(const std::vector<TriangleMesh>& shapes,
+                                      double density_kg_m3) {
+  const ModelFrameCompound compound(shapes, density_kg_m3);
+  MassProperties p;
+  p.mass_kg = compound.mass;
+  p.T_obj_com = fromBullet(compound.principal);
+  p.principal_inertia =
+      Eigen::Vector3d(compound.inertia.x(), compound.inertia.y(), compound.inertia.z());
+  return p;
 }
 
 std::size_t RigidWorld::size() const {

@@ -13,20 +13,6 @@ namespace geofusion {
 namespace physics {
 namespace {
 
-/// The convex pieces a body is made of: the model's convex parts (when asked for and it has
-/// them), else its collision hull.
-std::vector<TriangleMesh> collisionShapes(const ObjectModel& model, bool convex_parts) {
-  std::vector<TriangleMesh> shapes;
-  if (convex_parts)
-    for (const TriangleMesh& part : model.collision_parts)
-      if (!part.empty()) shapes.push_back(part);
-  if (shapes.empty()) {
-    TriangleMesh hull = collisionHullOf(model);
-    if (!hull.empty()) shapes.push_back(std::move(hull));
-  }
-  return shapes;
-}
-
 /// Lowest point of the shapes along `up` in the world (for the plane's penetration and a floor).
 double lowestAlong(const std::vector<TriangleMesh>& shapes, const Eigen::Isometry3d& T,
                    const Eigen::Vector3d& up) {
@@ -35,18 +21,6 @@ double lowestAlong(const std::vector<TriangleMesh>& shapes, const Eigen::Isometr
     for (const Eigen::Vector3f& v : s.vertices)
       lowest = std::min(lowest, up.dot(T * v.cast<double>()));
   return lowest;
-}
-
-/// The slab whose top face is the plane, under the bodies' centre, 10 cm thick.
-void addSupportSlab(const StabilityPlane& plane, const Eigen::Vector3d& centre,
-                    double half_extent_m, const StabilityConfig& config, RigidWorld* world) {
-  const double thickness = 0.1;
-  const Eigen::Vector3d n = plane.normal.normalized();
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), n).toRotationMatrix();
-  T.translation() = centre - (n.dot(centre) - plane.offset) * n - 0.5 * thickness * n;
-  world->addStaticBox(T, Eigen::Vector3d(half_extent_m, half_extent_m, 0.5 * thickness),
-                      config.friction, config.rolling_friction);
 }
 
 RigidBodyOptions bodyOptions(const StabilityConfig& c) {
@@ -126,14 +100,14 @@ StabilityPlane supportOrFloor(const StabilityPlane* plane, const std::vector<Sta
                               StabilityResult* result) {
   result->has_plane = plane != nullptr;
   if (plane) return *plane;
-  StabilityPlane floor;
-  floor.normal = up;
-  floor.offset = std::numeric_limits<double>::infinity();
-  for (const Prepared& p : prepared)
-    floor.offset = std::min(floor.offset, lowestAlong(p.shapes, bodies[p.index].T_world_obj, up));
-  if (!std::isfinite(floor.offset)) floor.offset = 0.0;
+  std::vector<std::vector<TriangleMesh>> shapes;
+  std::vector<Eigen::Isometry3d> poses;
+  for (const Prepared& p : prepared) {
+    shapes.push_back(p.shapes);
+    poses.push_back(bodies[p.index].T_world_obj);
+  }
   result->warnings.push_back("no support plane: a floor is put under the lowest object");
-  return floor;
+  return floorUnder(shapes, poses, up);
 }
 
 /// Sums, bounds and the least stable pair over the checked bodies.
@@ -171,6 +145,54 @@ void summarise(const std::vector<Prepared>& prepared, const std::vector<std::pai
 }
 
 }  // namespace
+
+std::vector<TriangleMesh> bodyShapes(const ObjectModel& model, const StabilityConfig& config) {
+  std::vector<TriangleMesh> shapes;
+  if (config.convex_parts)
+    for (const TriangleMesh& part : model.collision_parts)
+      if (!part.empty()) shapes.push_back(part);
+  if (shapes.empty()) {
+    TriangleMesh hull = collisionHullOf(model);
+    if (!hull.empty()) shapes.push_back(std::move(hull));
+  }
+  return shapes;
+}
+
+StabilityPlane floorUnder(const std::vector<std::vector<TriangleMesh>>& shapes,
+                          const std::vector<Eigen::Isometry3d>& poses, const Eigen::Vector3d& up) {
+  StabilityPlane floor;
+  floor.normal = up;
+  floor.offset = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < shapes.size() && i < poses.size(); ++i)
+    floor.offset = std::min(floor.offset, lowestAlong(shapes[i], poses[i], up));
+  if (!std::isfinite(floor.offset)) floor.offset = 0.0;
+  return floor;
+}
+
+Eigen::Vector3d gravityDirection(const Eigen::Vector3d& gravity, const StabilityPlane* plane) {
+  return gravity.allFinite() && gravity.norm() > 1e-9 ? gravity.normalized()
+         : plane                                      ? -plane->normal.normalized()
+                                                      : Eigen::Vector3d(0, 0, -1);
+}
+
+SupportSlab supportSlab(const StabilityPlane& plane,
+                        const std::vector<Eigen::AlignedBox3d>& boxes) {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (const Eigen::AlignedBox3d& b : boxes) centre += b.center();
+  if (!boxes.empty()) centre /= double(boxes.size());
+  double spread = 0.5;
+  for (const Eigen::AlignedBox3d& b : boxes)
+    spread = std::max(spread, (b.center() - centre).norm() + b.diagonal().norm());
+  const double thickness = 0.1, half_extent = spread + 0.5;
+  const Eigen::Vector3d n = plane.normal.normalized();
+  SupportSlab slab;
+  slab.T_world_box.linear() =
+      Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), n).toRotationMatrix();
+  slab.T_world_box.translation() =
+      centre - (n.dot(centre) - plane.offset) * n - 0.5 * thickness * n;
+  slab.half_extents = Eigen::Vector3d(half_extent, half_extent, 0.5 * thickness);
+  return slab;
+}
 
 const std::vector<StabilitySetting>& stabilitySettings() {
   using C = StabilityConfig;
@@ -224,11 +246,8 @@ StabilityResult checkStability(const std::vector<StabilityBody>& bodies,
   const StabilityConfig defaults;
   const StabilityConfig& c = result.warnings.empty() ? config : defaults;
   if (!result.warnings.empty()) result.warnings.push_back("physics: the defaults are used instead");
-  Eigen::Vector3d g = gravity.allFinite() && gravity.norm() > 1e-9 ? gravity.normalized()
-                      : plane                                      ? -plane->normal.normalized()
-                                                                   : Eigen::Vector3d(0, 0, -1);
+  const Eigen::Vector3d g = gravityDirection(gravity, plane);
   std::vector<Prepared> prepared;
-  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     BodyMotion m;
     m.id = bodies[i].id;
@@ -237,7 +256,7 @@ StabilityResult checkStability(const std::vector<StabilityBody>& bodies,
       m.problem = "no model";
     else if (!bodies[i].T_world_obj.matrix().allFinite())
       m.problem = "pose not finite";
-    else if ((shapes = collisionShapes(*bodies[i].model, c.convex_parts)).empty())
+    else if ((shapes = bodyShapes(*bodies[i].model, c)).empty())
       m.problem = "no collision shape";
     if (!m.problem.empty()) {
       result.warnings.push_back("object " + std::to_string(m.id) + " (" +
@@ -247,21 +266,19 @@ StabilityResult checkStability(const std::vector<StabilityBody>& bodies,
       m.simulated = true;
       Prepared p{i, std::move(shapes), {}};
       p.box = worldBox(p.shapes, bodies[i].T_world_obj);
-      centre += p.box.center();
       prepared.push_back(std::move(p));
     }
     result.bodies.push_back(m);
   }
   if (prepared.empty()) return result;
-  centre /= double(prepared.size());
   const StabilityPlane support = supportOrFloor(plane, bodies, prepared, -g, &result);
   const auto pairs = startContacts(bodies, prepared, support, c, &result.bodies);
 
-  double spread = 0.5;
-  for (const Prepared& p : prepared)
-    spread = std::max(spread, (p.box.center() - centre).norm() + p.box.diagonal().norm());
+  std::vector<Eigen::AlignedBox3d> boxes;
+  for (const Prepared& p : prepared) boxes.push_back(p.box);
   RigidWorld world(g * c.gravity_m_s2);
-  addSupportSlab(support, centre, spread + 0.5, c, &world);
+  const SupportSlab slab = supportSlab(support, boxes);
+  world.addStaticBox(slab.T_world_box, slab.half_extents, c.friction, c.rolling_friction);
   std::vector<Eigen::Vector3d> com_before;
   for (const Prepared& p : prepared) {
     world.add(p.shapes, bodies[p.index].T_world_obj, bodyOptions(c));

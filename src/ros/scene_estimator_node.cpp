@@ -115,6 +115,7 @@ void SceneEstimatorNode::advertise() {
   load_srv_ = pnh_.advertiseService("load_map", &SceneEstimatorNode::onLoad, this);
   reset_srv_ = pnh_.advertiseService("reset", &SceneEstimatorNode::onReset, this);
   scene_graph_srv_ = pnh_.advertiseService("scene_graph", &SceneEstimatorNode::onSceneGraph, this);
+  export_srv_ = pnh_.advertiseService("export_scene", &SceneEstimatorNode::onExportScene, this);
 }
 
 void SceneEstimatorNode::startReconfigure() {
@@ -887,6 +888,43 @@ bool SceneEstimatorNode::onSceneGraph(geofusion::GetSceneGraph::Request& /*req*/
   header.frame_id = map_frame_;
   header.stamp = ros::Time(std::max(0.0, map.stamp_s));
   res.graph = sceneGraphOf(map, plane, gravity, header, true);
+  return true;
+}
+
+// ~export_scene: the current map written for simulators (docs/scene_export.md).
+bool SceneEstimatorNode::onExportScene(geofusion::ExportScene::Request& req,
+                                       geofusion::ExportScene::Response& res) {
+  if (req.folder.empty()) {
+    res.success = false;
+    res.message = "empty folder";
+    return true;
+  }
+  KeyframeResult map;
+  SupportPlane plane;
+  Eigen::Vector3d gravity;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    map = pipeline_->currentMap(false).final_map;
+    plane = pipeline_->estimator().supportPlane();
+    gravity = pipeline_->estimator().config().gravity;
+  }
+  physics::SceneExport exported;
+  std::string error;
+  res.success =
+      exportMapScene(map.objects, &plane, gravity, config_.physics, req.folder, &exported, &error);
+  if (!res.success) {
+    res.message = "export_scene: " + error;
+    ROS_WARN_STREAM("geofusion: " << res.message);
+    return true;
+  }
+  res.files = {exported.sdf_path, exported.urdf_path};
+  res.files.insert(res.files.end(), exported.mesh_paths.begin(), exported.mesh_paths.end());
+  res.warnings = exported.warnings;
+  for (const std::string& w : exported.warnings) ROS_WARN_STREAM("geofusion: export_scene: " << w);
+  res.message = "exported " + std::to_string(exported.exported) + " of " +
+                std::to_string(map.objects.size()) + " objects to " + exported.sdf_path + " and " +
+                exported.urdf_path;
+  ROS_INFO_STREAM("geofusion: " << res.message);
   return true;
 }
 

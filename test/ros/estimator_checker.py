@@ -9,6 +9,7 @@ import tempfile
 import threading
 import time
 import unittest
+import xml.etree.ElementTree as ElementTree
 
 import rospy
 import rostest
@@ -16,7 +17,7 @@ import tf2_ros
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from dynamic_reconfigure.client import Client
 from geofusion.msg import ObjectMap, SceneGraph
-from geofusion.srv import GetSceneGraph, LoadMap, SaveBopResults, SaveMap
+from geofusion.srv import ExportScene, GetSceneGraph, LoadMap, SaveBopResults, SaveMap
 from std_srvs.srv import Trigger
 from sensor_msgs import point_cloud2
 from sensor_msgs.msg import PointCloud2
@@ -91,6 +92,33 @@ class EstimatorReplayTest(unittest.TestCase):
         # The topic's plan leaves stability to the service (a second of simulation).
         self.assertTrue(all(o.stable == -1 for o in topic[-1].objects))
         self.assertEqual(topic[-1].removal_order, graph.removal_order)
+
+    def check_export_scene(self, final):
+        """~export_scene (issue 50): the map as an SDF world and a URDF, one model and one link
+        per object of the map plus the support plane, meshes written, check_urdf satisfied."""
+        rospy.wait_for_service(NS + '/export_scene', 5.0)
+        export = rospy.ServiceProxy(NS + '/export_scene', ExportScene)
+        folder = os.path.join(self.dir, 'export')
+        res = export(folder)
+        self.assertTrue(res.success, res.message)
+        self.assertEqual(res.files[:2], [os.path.join(folder, 'scene.sdf'),
+                                         os.path.join(folder, 'scene.urdf')])
+        for path in res.files:
+            self.assertTrue(os.path.getsize(path) > 0, path)
+        self.assertEqual(list(res.warnings), [])
+        world = ElementTree.parse(res.files[0]).getroot().find('world')
+        models = [m.get('name') for m in world.findall('model')]
+        self.assertEqual(len(models), len(final.objects) + 1, models)
+        self.assertIn('support_plane', models)
+        self.assertEqual(sorted(int(m.rsplit('_', 1)[1]) for m in models if m != 'support_plane'),
+                         sorted(o.id for o in final.objects))
+        checked = subprocess.run(['check_urdf', res.files[1]], stdout=subprocess.PIPE,
+                                 stderr=subprocess.STDOUT, universal_newlines=True)
+        self.assertEqual(checked.returncode, 0, checked.stdout)
+        self.assertIn('root Link: map has %d child(ren)' % (len(final.objects) + 1),
+                      checked.stdout)
+        # Bad input: no folder, said.
+        self.assertFalse(export('').success)
 
     def on_map(self, msg):
         with self.lock:
@@ -234,6 +262,7 @@ class EstimatorReplayTest(unittest.TestCase):
                  if 'input rate ' + util.DETECTIONS_TOPIC in d_values]
         self.assertGreater(max(rates), 2.0, 'the detections rate never showed (5 Hz played)')
         self.check_scene_graph(final)
+        self.check_export_scene(final)
         # Save, then reset.
         rospy.wait_for_service(NS + '/save_map', 5.0)
         prefix = os.path.join(self.dir, 'saved')

@@ -5,8 +5,10 @@
 #include "geofusion/estimation/relations.h"
 #include "geofusion/estimation/scene_estimator.h"
 #include "geofusion/estimation/scene_graph.h"
+#include "geofusion/physics/scene_export.h"
 #include "geofusion/physics/stability.h"
 
+#include <string>
 #include <vector>
 
 namespace geofusion {
@@ -17,6 +19,12 @@ physics::StabilityResult checkMapStability(const std::vector<ObjectEstimate>& ob
                                            const SupportPlane* plane,
                                            const Eigen::Vector3d& gravity,
                                            const physics::StabilityConfig& config);
+
+/// The map written for simulators (physics/scene_export.h): an SDF world and a URDF in `folder`,
+/// the objects on `plane` as the stability check puts them.
+bool exportMapScene(const std::vector<ObjectEstimate>& objects, const SupportPlane* plane,
+                    const Eigen::Vector3d& gravity, const physics::StabilityConfig& config,
+                    const std::string& folder, physics::SceneExport* result, std::string* error);
 
 /// The map's scene graph (scene_graph.h) from its contacts (indices into `objects`): the existence
 /// score is what the robot sees best, the centre the model box's; whether each object stands

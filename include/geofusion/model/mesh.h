@@ -33,6 +33,10 @@ void scaleMesh(double scale, TriangleMesh* mesh);
 /// Loads a mesh file with assimp (all sub-meshes merged, triangulated). On failure returns false
 /// and `error` names the file and the reason (missing, unreadable, no triangles).
 bool loadMesh(const std::string& path, TriangleMesh* mesh, std::string* error);
+/// Writes the mesh's vertices and triangles with assimp's exporter in `format` (assimp's id:
+/// "stlb" binary STL, "obj", "collada", ...). On failure returns false and `error` says why.
+bool saveMesh(const std::string& path, const TriangleMesh& mesh, const std::string& format,
+              std::string* error);
 
 /// A lighter copy of `mesh` for depth rendering: vertices welded by position (uvs and texture
 /// dropped), then edge collapses (meshoptimizer) towards `target_triangles` while the geometric

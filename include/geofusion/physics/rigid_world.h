@@ -24,6 +24,17 @@ struct RigidBodyOptions {
   double angular_damping = 0.4;
 };
 
+/// A compound body's mass, centre of mass and inertia, as RigidWorld simulates it (options' mass
+/// 0): mass density x volume of each convex shape, Bullet's principal axes and inertia.
+struct MassProperties {
+  double mass_kg = 0.0;
+  /// Centre of mass and principal axes in the model frame.
+  Eigen::Isometry3d T_obj_com = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d principal_inertia = Eigen::Vector3d::Zero();  ///< kg m^2, about those axes
+};
+MassProperties compoundMassProperties(const std::vector<TriangleMesh>& shapes,
+                                      double density_kg_m3);
+
 class RigidWorld {
  public:
   explicit RigidWorld(const Eigen::Vector3d& gravity);

@@ -4,6 +4,8 @@
 // proxies, this asks the question itself. Used by the evaluation (every method and the ground
 // truth) and by the runtime; Bullet stays inside stability.cpp.
 #pragma once
+#include "geofusion/model/mesh.h"
+
 #include <Eigen/Geometry>
 #include <memory>
 #include <string>
@@ -102,6 +104,28 @@ struct StabilityResult {
   double stableShare() const { return checked > 0 ? double(stable) / checked : 0.0; }
   const BodyMotion* find(int id) const;
 };
+
+/// The convex pieces a body is made of in the check (and in an exported scene): the model's
+/// convex parts when `config.convex_parts` asks for them and it has them, else its collision hull;
+/// empty when it has neither.
+std::vector<TriangleMesh> bodyShapes(const ObjectModel& model, const StabilityConfig& config);
+
+/// The plane bodies stand on when none is given: a floor (normal `up`) under the lowest point of
+/// their shapes (`shapes[i]` in the model frame of `poses[i]`).
+StabilityPlane floorUnder(const std::vector<std::vector<TriangleMesh>>& shapes,
+                          const std::vector<Eigen::Isometry3d>& poses, const Eigen::Vector3d& up);
+
+/// The direction of gravity a check uses: `gravity` normalised, else (zero or not finite) against
+/// the plane's normal, else -z.
+Eigen::Vector3d gravityDirection(const Eigen::Vector3d& gravity, const StabilityPlane* plane);
+
+/// The static slab the bodies stand on: its top face the plane, centred under the bodies' world
+/// boxes, 10 cm thick, reaching 0.5 m beyond them (at least 1 m from the centre).
+struct SupportSlab {
+  Eigen::Isometry3d T_world_box = Eigen::Isometry3d::Identity();  ///< its centre, z its normal
+  Eigen::Vector3d half_extents = Eigen::Vector3d::Zero();
+};
+SupportSlab supportSlab(const StabilityPlane& plane, const std::vector<Eigen::AlignedBox3d>& boxes);
 
 /// Puts the bodies on the plane (a static slab whose top face is the plane; none given: a floor
 /// under the lowest object, with a warning), gravity along `gravity` (normalised here; zero:

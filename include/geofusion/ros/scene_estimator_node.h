@@ -11,6 +11,7 @@
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
+#include <geofusion/ExportScene.h>
 #include <geofusion/GetSceneGraph.h>
 #include <geofusion/LoadMap.h>
 #include <geofusion/SaveBopResults.h>
@@ -81,6 +82,7 @@ class SceneEstimatorNode {
   bool onReset(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   bool onSceneGraph(geofusion::GetSceneGraph::Request& req,
                     geofusion::GetSceneGraph::Response& res);
+  bool onExportScene(geofusion::ExportScene::Request& req, geofusion::ExportScene::Response& res);
   geofusion::SceneGraph sceneGraphOf(const KeyframeResult& map, const SupportPlane& plane,
                                      const Eigen::Vector3d& gravity, const std_msgs::Header& header,
                                      bool check_stability) const;
@@ -133,7 +135,7 @@ class SceneEstimatorNode {
   std::vector<geometry_msgs::TransformStamped> object_frames_;
   ros::Timer object_frames_timer_;
   double object_frames_tolerance_s_ = 0.2;
-  ros::ServiceServer save_srv_, save_bop_srv_, load_srv_, reset_srv_, scene_graph_srv_;
+  ros::ServiceServer save_srv_, save_bop_srv_, load_srv_, reset_srv_, scene_graph_srv_, export_srv_;
   diagnostic_updater::Updater diagnostics_;
   ros::WallTimer diagnostics_timer_;
   std::atomic<std::size_t> frames_{0};  // synchronised sets received
