@@ -158,13 +158,24 @@ TriangleMesh boundedHull(const std::vector<Eigen::Vector3f>& points) {
   return hull;
 }
 
+// The mesh the collision shapes are made from. With meshoptimizer 0.16 or later (error output):
+// the <= 400-triangle simplification within 2 mm. Without it (Ubuntu 20.04), or with 0.15
+// (Debian 11), which reports no error, so the bound cannot be kept, and whose coarser
+// simplification kept only 0.945 of the scissors' hull volume and let a settled YCB scene topple:
+// the mesh itself (its hull then bounded to 400 support points by boundedHull). Debian 11 and
+// the Ubuntu 20.04 profile thus make the same shapes (docs/platforms.md).
+TriangleMesh collisionSource(const TriangleMesh& mesh) {
+#if GEOFUSION_HAVE_MESHOPTIMIZER && GEOFUSION_MESHOPT_ERROR_OUTPUT
+  return simplifyMesh(mesh, 400, 0.002);
+#else
+  return mesh;
+#endif
+}
+
 }  // namespace
 
 TriangleMesh collisionHull(const TriangleMesh& mesh) {
-  // One hull on every build, from the full mesh. It was once the hull of the meshoptimizer-
-  // simplified mesh, which differs between meshoptimizer releases (0.15 on Debian 11 kept 0.945
-  // of the scissors' volume) and is missing on Ubuntu 20.04 (docs/platforms.md).
-  return boundedHull(mesh.vertices);
+  return boundedHull(collisionSource(mesh).vertices);
 }
 
 namespace {
@@ -201,7 +212,7 @@ void addParts(const std::vector<Eigen::Vector3f>& points, TriangleMesh hull, int
   if (depth_left > 0 && points.size() >= 40 && volume > 0.0) {
     std::vector<Eigen::Vector3f> lower, upper;
     splitAcrossLongestAxis(points, 0.001f, &lower, &upper);
-    TriangleMesh lower_hull = boundedHull(lower), upper_hull = boundedHull(upper);
+    TriangleMesh lower_hull = convexHull(lower), upper_hull = convexHull(upper);
     if (!lower_hull.empty() && !upper_hull.empty() &&
         enclosedVolume(lower_hull) + enclosedVolume(upper_hull) < fill * volume) {
       addParts(lower, std::move(lower_hull), depth_left - 1, fill, parts);
@@ -217,9 +228,9 @@ void addParts(const std::vector<Eigen::Vector3f>& points, TriangleMesh hull, int
 std::vector<TriangleMesh> collisionParts(const TriangleMesh& mesh, const TriangleMesh& hull,
                                          int max_depth, double fill) {
   if (hull.empty() || mesh.empty()) return {hull};
-  // The full mesh, as collisionHull: the same parts on every build (docs/platforms.md).
-  std::vector<Eigen::Vector3f> points = mesh.vertices;
-  const std::vector<Eigen::Vector3f> samples = sampleSurfacePoints(mesh, 3000, 11);
+  const TriangleMesh light = collisionSource(mesh);
+  std::vector<Eigen::Vector3f> points = light.vertices;
+  const std::vector<Eigen::Vector3f> samples = sampleSurfacePoints(light, 3000, 11);
   points.insert(points.end(), samples.begin(), samples.end());
   // Starting from the collision hull: where it fits, it is the one part (the shape the other
   // checks use).

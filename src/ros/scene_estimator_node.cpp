@@ -908,6 +908,8 @@ bool SceneEstimatorNode::onExportScene(geofusion::ExportScene::Request& req,
     plane = pipeline_->estimator().supportPlane();
     gravity = pipeline_->estimator().config().gravity;
   }
+  // Named with the ids of the node's messages (ObjectMap, ~scene_graph: messageId).
+  for (ObjectEstimate& o : map.objects) o.id = static_cast<int>(messageId(o.id));
   physics::SceneExport exported;
   std::string error;
   res.success =

@@ -353,7 +353,7 @@ TEST(ObjectOverlap, ConvexPartsCoverTheShapeAndFillLessThanTheHull) {
       EXPECT_GT(m.collision_parts.size(), 1u);
       EXPECT_LT(parts_volume, 0.8 * enclosedVolume(m.collision_hull));
     }
-    // The surface lies in the parts (2.5 mm: the support-point cut's 2 mm and a margin).
+    // The surface lies in the parts (2.5 mm: the simplification's 2 mm and a margin).
     int outside = 0, checked = 0;
     for (std::size_t k = 0; k < m.points.size(); k += 7, ++checked) {
       bool inside = false;

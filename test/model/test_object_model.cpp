@@ -206,9 +206,11 @@ TEST(SimplifyMesh, YcbScanShrinksTenfoldWithinTwoMillimetres) {
   }
 }
 
-// The collision hull Bullet and FCL use is the same on every build (the full mesh's hull, cut
-// down to its support points along 400 directions: Bullet's contacts on a hull of thousands of
-// vertices jitter) and stays within 4 mm of the full mesh's hull.
+// The collision hull Bullet and FCL use has a bounded vertex count on every build (with
+// meshoptimizer 0.16+ from the simplification, without it or with 0.15 from its support points:
+// Bullet's contacts on a hull of thousands of vertices jitter) and stays within 4 mm of the full
+// mesh's hull (meshoptimizer's 2 mm bound is its own error metric: 2.9 mm measured on the large
+// clamp).
 TEST(CollisionHull, YcbHullsAreBoundedAndKeepTheShape) {
   if (!test::haveYcb()) GTEST_SKIP() << "YCB-Video models not found at " << test::ycbDir();
   for (const char* name : {"011_banana", "037_scissors", "051_large_clamp", "024_bowl"}) {

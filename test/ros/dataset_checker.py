@@ -87,7 +87,7 @@ class DatasetTest(unittest.TestCase):
         self.assertGreaterEqual(n_objects, 8)
         for c in gt['contacts']:
             self.assertTrue(-1 <= c['a'] < n_objects and 0 <= c['b'] < n_objects, c)
-            self.assertIn(c['type'], ('P2P', 'P2C', 'C2C'))
+            self.assertIn(c['type'], ('P2P', 'P2C', 'C2C', 'P2E'))
         self.assertTrue(any(c['a'] == -1 for c in gt['contacts']), 'the table supports nothing')
         frames = gt['frames']
         keyframes = [f for f in frames if f['keyframe']]

@@ -58,7 +58,7 @@ struct ObjectModel {
   /// The mesh's axis-aligned box, model frame (ModelSet::add fills it; empty: boxOf measures the
   /// mesh).
   Eigen::AlignedBox3f box;
-  /// Convex hull of the mesh (collisionHull): the shape physics (Bullet) and collision checks (FCL)
+  /// Convex collision hull (collisionHull): the shape physics (Bullet) and collision checks (FCL)
   /// use.
   TriangleMesh collision_hull;
   /// Convex parts whose union covers the shape (collisionParts): what a merge's interpenetration
@@ -70,14 +70,14 @@ struct ObjectModel {
 /// stored (a model built by hand).
 Eigen::AlignedBox3f boxOf(const ObjectModel& model);
 
-/// The convex collision hull ObjectModel::collision_hull holds: the hull of the mesh's vertices,
-/// cut down to its support points along 400 directions when it has more (the same on every
-/// build, with or without meshoptimizer).
+/// The convex collision hull ObjectModel::collision_hull holds: the hull of the <= 400-triangle,
+/// <= 2 mm simplification of the mesh (meshoptimizer 0.16 and later), else of the mesh itself cut
+/// down to its support points along 400 directions (without meshoptimizer, or 0.15).
 TriangleMesh collisionHull(const TriangleMesh& mesh);
 
 /// A convex decomposition of a concave model, made once per model (ModelSet::add): the surface
-/// (the mesh's vertices and 3000 samples of it) is cut in two across its longest principal
-/// axis, each half's hull kept (bounded as collisionHull's), and each half cut again while the
+/// (the vertices of the mesh collisionHull starts from and 3000 samples of it) is cut in two
+/// across its longest principal axis, each half's hull kept, and each half cut again while the
 /// halves' hulls fill less than `fill` of their parent's volume, to at most 2^max_depth parts
 /// (halves overlap by 1 mm so that their union covers the surface). A model its hull fits (a box, a
 /// can) keeps one part: `hull` itself.
