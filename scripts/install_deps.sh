@@ -23,7 +23,7 @@ PACKAGES=(
   pybind11-dev python3-dev python3-pytest python3-pil
   # tools, tests, screenshots
   python3-numpy python3-scipy python3-yaml python3-matplotlib python3-venv python3-pip xvfb imagemagick
-  liburdfdom-tools
+  liburdfdom-tools libsdformat-dev
   # package.xml's rosdep keys resolved offline (scripts/check_rosdep.sh)
   python3-rosdep2
 )
@@ -36,12 +36,7 @@ case "$codename" in
   bullseye|bookworm|focal) PACKAGES+=(qtbase5-dev) ;;
   *) PACKAGES+=(qt6-base-dev) ;;
 esac
-# libsdformat, which the export's test parses the SDF with: SDFormat 9 on Debian 11 (and Ubuntu
-# 20.04), the unversioned name from Debian 12 on.
-case "$codename" in
-  bullseye|focal) PACKAGES+=(libsdformat9-dev) ;;
-  *) PACKAGES+=(libsdformat-dev) ;;
-esac
+
 
 # --print [RELEASE]: the list, one name a line (scripts/test_platforms.sh installs the same list in its chroots).
 if [ "${1:-}" = "--print" ]; then

@@ -872,18 +872,22 @@ geofusion::SceneGraph SceneEstimatorNode::sceneGraphOf(const KeyframeResult& map
   return toSceneGraphMsg(graph, header);
 }
 
+// The current map, its support plane and gravity, copied under the lock (the services' input).
+void SceneEstimatorNode::snapshotMap(KeyframeResult* map, SupportPlane* plane,
+                                     Eigen::Vector3d* gravity) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  *map = pipeline_->currentMap(false).final_map;
+  *plane = pipeline_->estimator().supportPlane();
+  *gravity = pipeline_->estimator().config().gravity;
+}
+
 // ~scene_graph: the current map's plan, made now.
 bool SceneEstimatorNode::onSceneGraph(geofusion::GetSceneGraph::Request& /*req*/,
                                       geofusion::GetSceneGraph::Response& res) {
   KeyframeResult map;
   SupportPlane plane;
   Eigen::Vector3d gravity;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    map = pipeline_->currentMap(false).final_map;
-    plane = pipeline_->estimator().supportPlane();
-    gravity = pipeline_->estimator().config().gravity;
-  }
+  snapshotMap(&map, &plane, &gravity);
   std_msgs::Header header;
   header.frame_id = map_frame_;
   header.stamp = ros::Time(std::max(0.0, map.stamp_s));
@@ -902,12 +906,7 @@ bool SceneEstimatorNode::onExportScene(geofusion::ExportScene::Request& req,
   KeyframeResult map;
   SupportPlane plane;
   Eigen::Vector3d gravity;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    map = pipeline_->currentMap(false).final_map;
-    plane = pipeline_->estimator().supportPlane();
-    gravity = pipeline_->estimator().config().gravity;
-  }
+  snapshotMap(&map, &plane, &gravity);
   // Named with the ids of the node's messages (ObjectMap, ~scene_graph: messageId).
   for (ObjectEstimate& o : map.objects) o.id = static_cast<int>(messageId(o.id));
   physics::SceneExport exported;

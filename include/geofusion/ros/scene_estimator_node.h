@@ -83,6 +83,7 @@ class SceneEstimatorNode {
   bool onSceneGraph(geofusion::GetSceneGraph::Request& req,
                     geofusion::GetSceneGraph::Response& res);
   bool onExportScene(geofusion::ExportScene::Request& req, geofusion::ExportScene::Response& res);
+  void snapshotMap(KeyframeResult* map, SupportPlane* plane, Eigen::Vector3d* gravity);
   geofusion::SceneGraph sceneGraphOf(const KeyframeResult& map, const SupportPlane& plane,
                                      const Eigen::Vector3d& gravity, const std_msgs::Header& header,
                                      bool check_stability) const;
