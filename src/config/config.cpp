@@ -512,6 +512,18 @@ class Table {
     flag("stage_two.lift_out_of_support",
          "an object deeper through the support plane than the contacts reach is lifted onto it",
          [f](GeoFusionConfig& c) { return &f(c)->lift_out_of_support; });
+    integer("stage_two.separation_rounds", 0, 10,
+            "stage II solved again with separation factors while estimates interpenetrate, at "
+            "most this often (0: off)",
+            [f](GeoFusionConfig& c) { return &f(c)->separation_rounds; });
+    real("stage_two.separation_min_depth_m", 0, 0.05,
+         "collision hulls interpenetrating deeper than this get a separation factor, m",
+         [f](GeoFusionConfig& c) { return &f(c)->separation_min_depth_m; });
+    real("stage_two.separation_margin_m", 0, 0.01,
+         "a separation factor parts the pair by its depth plus this, m",
+         [f](GeoFusionConfig& c) { return &f(c)->separation_margin_m; });
+    real("stage_two.separation_sigma_m", 1e-6, 0.1, "sigma of the separation factors, m",
+         [f](GeoFusionConfig& c) { return &f(c)->separation_sigma_m; });
   }
   void background() {
     flag("background.enabled", "build the OctoMap of the static background",

@@ -6,6 +6,7 @@
 #include "geofusion/estimation/factors/contact_factor.h"
 #include "geofusion/estimation/factors/pose_block.h"
 #include "geofusion/estimation/factors/relative_pose_factor.h"
+#include "geofusion/estimation/factors/separation_factor.h"
 #include "geofusion/estimation/symmetry_axis.h"
 
 #include "geofusion/common/ceres_compat.h"
@@ -399,92 +400,138 @@ bool contactFactorOf(const FeatureContact& c, const ObjectModel& ma, const Objec
   return featureGeometry(*swapped ? ma : mb, fb, &e->c_b, &e->n_b, &e->r_b);
 }
 
+// Stage II's problem: the object pose blocks (warm-started), the fixed support and identity
+// blocks, and the factors; an object joins (with its prior) at its first factor.
+class StageTwoProblem {
+ public:
+  StageTwoProblem(const std::vector<Eigen::Isometry3d>& T_world_obj,
+                  const std::vector<const ObjectModel*>& models,
+                  const std::vector<Eigen::Isometry3d>& priors, const PosedModel* ground,
+                  const StageTwoConfig& config)
+      : problem_(ceres_compat::optionsKeepingManifolds()),  // manifold_ is constructed first
+        models_(models),
+        priors_(priors),
+        ground_(ground),
+        config_(config),
+        objs_(T_world_obj.size()),
+        in_problem_(T_world_obj.size(), 0) {
+    for (std::size_t i = 0; i < objs_.size(); ++i) objs_[i].set(T_world_obj[i]);
+    identity_.set(Eigen::Isometry3d::Identity());
+    if (ground) ground_block_.set(ground->T_world_obj);
+  }
+
+  bool addContact(const FeatureContact& c) {
+    if (c.held || (c.kind == ContactKind::kLeaning && !config_.leaning_contacts) ||
+        (c.kind == ContactKind::kSide && !config_.side_contacts))
+      return false;
+    PoseBlock *a = block(c.object_a), *b = block(c.object_b);
+    const ObjectModel *ma = modelOf(c.object_a), *mb = modelOf(c.object_b);
+    if (!a || !b || !ma || !mb || a == b) return false;
+    ContactFactor e;
+    bool swap = false;
+    if (!contactFactorOf(c, *ma, *mb, config_, &e, &swap)) return false;
+    if (swap) std::swap(a, b);
+    join(c.object_a), join(c.object_b);
+    auto* cost = new ceres::AutoDiffCostFunction<ContactFactor, 4, 7, 7>(new ContactFactor(e));
+    problem_.AddResidualBlock(cost, makeLoss(config_.contact_loss), a->data(), b->data());
+    return true;
+  }
+
+  bool addSeparation(const Separation& s) {
+    PoseBlock *a = block(s.object_a), *b = block(s.object_b);
+    if (!a || !b || a == b || !(s.depth > 0.0)) return false;
+    SeparationFactor f;
+    f.p_a = s.p_a, f.p_b = s.p_b, f.normal = s.normal.normalized();
+    f.depth = s.depth + config_.separation_margin_m;
+    f.weight = 1.0 / config_.separation_sigma_m;
+    join(s.object_a), join(s.object_b);
+    auto* cost =
+        new ceres::AutoDiffCostFunction<SeparationFactor, 1, 7, 7>(new SeparationFactor(f));
+    problem_.AddResidualBlock(cost, nullptr, a->data(), b->data());
+    return true;
+  }
+
+  // Solves; the objects without a factor take their priors, as do all when the solve fails.
+  void solve(std::vector<Eigen::Isometry3d>* T_world_obj, StageTwoSummary* summary) {
+    problem_.SetParameterBlockConstant(identity_.data());
+    if (problem_.HasParameterBlock(ground_block_.data()))
+      problem_.SetParameterBlockConstant(ground_block_.data());
+    const ceres::Solver::Summary s =
+        solveQuietly(&problem_, ceres::SPARSE_NORMAL_CHOLESKY, config_.max_iterations);
+    summary->status = statusOf(s);
+    summary->solved = usable(summary->status);
+    summary->iterations = static_cast<int>(s.iterations.size());
+    summary->initial_cost = s.initial_cost;
+    summary->final_cost = s.final_cost;
+    for (std::size_t i = 0; i < objs_.size(); ++i)
+      (*T_world_obj)[i] = (summary->solved && in_problem_[i]) ? objs_[i].get() : priors_[i];
+  }
+
+ private:
+  PoseBlock* block(int index) {
+    if (index < 0) return ground_ ? &ground_block_ : nullptr;
+    return index < static_cast<int>(objs_.size()) ? &objs_[static_cast<std::size_t>(index)]
+                                                  : nullptr;
+  }
+  const ObjectModel* modelOf(int index) const {
+    if (index < 0) return ground_ ? ground_->model : nullptr;
+    return index < static_cast<int>(models_.size()) ? models_[static_cast<std::size_t>(index)]
+                                                    : nullptr;
+  }
+  // Puts the object's block (with its prior factor) or the ground's into the problem once.
+  void join(int index) {
+    if (index < 0) {
+      if (!problem_.HasParameterBlock(ground_block_.data()))
+        problem_.AddParameterBlock(ground_block_.data(), 7, &manifold_);
+      return;
+    }
+    const std::size_t i = static_cast<std::size_t>(index);
+    if (in_problem_[i]) return;
+    problem_.AddParameterBlock(objs_[i].data(), 7, &manifold_);
+    in_problem_[i] = 1;
+    Eigen::Vector3d axis;
+    const bool free = freeAxis(models_[i], &axis);
+    auto* prior = new ceres::AutoDiffCostFunction<RelativePoseFactor, 6, 7, 7>(
+        new RelativePoseFactor(priors_[i], 1.0 / config_.prior_sigma_position_m,
+                               1.0 / config_.prior_sigma_rotation_rad, free, axis));
+    problem_.AddResidualBlock(prior, nullptr, identity_.data(), objs_[i].data());
+  }
+
+  PoseManifold manifold_;  // before the problem, which refers to it (not owned)
+  ceres::Problem problem_;
+  const std::vector<const ObjectModel*>& models_;
+  const std::vector<Eigen::Isometry3d>& priors_;
+  const PosedModel* ground_;
+  const StageTwoConfig& config_;
+  std::vector<PoseBlock> objs_;
+  std::vector<char> in_problem_;
+  PoseBlock ground_block_, identity_;
+};
+
 }  // namespace
 
 StageTwoSummary optimizeStageTwo(std::vector<Eigen::Isometry3d>* T_world_obj,
                                  const std::vector<const ObjectModel*>& models,
                                  const std::vector<Eigen::Isometry3d>& priors,
                                  const std::vector<FeatureContact>& contacts,
-                                 const PosedModel* ground, const StageTwoConfig& config) {
+                                 const PosedModel* ground, const StageTwoConfig& config,
+                                 const std::vector<Separation>& separations) {
   StageTwoSummary summary;
   const std::size_t n = T_world_obj->size();
   if (models.size() != n || priors.size() != n) {
     summary.status = SolveStatus::kBadInput;
     return summary;
   }
-  std::vector<PoseBlock> objs(n);
-  for (std::size_t i = 0; i < n; ++i) objs[i].set((*T_world_obj)[i]);
-  PoseBlock ground_block, identity;
-  identity.set(Eigen::Isometry3d::Identity());
-  if (ground) ground_block.set(ground->T_world_obj);
-
-  ceres::Problem problem(ceres_compat::optionsKeepingManifolds());
-  PoseManifold manifold;
-  std::vector<char> in_problem(n, 0);
-  auto block = [&](int index) -> PoseBlock* {
-    if (index < 0) return ground ? &ground_block : nullptr;
-    return index < static_cast<int>(n) ? &objs[static_cast<std::size_t>(index)] : nullptr;
-  };
-  auto model_of = [&](int index) -> const ObjectModel* {
-    if (index < 0) return ground ? ground->model : nullptr;
-    return models[static_cast<std::size_t>(index)];
-  };
-  auto add_object = [&](int index) {
-    if (index < 0 || in_problem[static_cast<std::size_t>(index)]) return;
-    PoseBlock& b = objs[static_cast<std::size_t>(index)];
-    problem.AddParameterBlock(b.data(), 7, &manifold);
-    in_problem[static_cast<std::size_t>(index)] = 1;
-    Eigen::Vector3d axis;
-    const bool free = freeAxis(models[static_cast<std::size_t>(index)], &axis);
-    auto* prior =
-        new ceres::AutoDiffCostFunction<RelativePoseFactor, 6, 7, 7>(new RelativePoseFactor(
-            priors[static_cast<std::size_t>(index)], 1.0 / config.prior_sigma_position_m,
-            1.0 / config.prior_sigma_rotation_rad, free, axis));
-    problem.AddResidualBlock(prior, nullptr, identity.data(), b.data());
-  };
-  bool uses_constants = false;
-  for (const FeatureContact& c : contacts) {
-    if (c.held || (c.kind == ContactKind::kLeaning && !config.leaning_contacts) ||
-        (c.kind == ContactKind::kSide && !config.side_contacts))
-      continue;
-    PoseBlock *a = block(c.object_a), *b = block(c.object_b);
-    const ObjectModel *ma = model_of(c.object_a), *mb = model_of(c.object_b);
-    if (!a || !b || !ma || !mb || a == b) continue;
-    ContactFactor e;
-    bool swap = false;
-    if (!contactFactorOf(c, *ma, *mb, config, &e, &swap)) continue;
-    if (swap) std::swap(a, b);
-    add_object(swap ? c.object_b : c.object_a);
-    add_object(swap ? c.object_a : c.object_b);
-    if (a == &ground_block || b == &ground_block) uses_constants = true;
-    if ((a == &ground_block || b == &ground_block) &&
-        !problem.HasParameterBlock(ground_block.data())) {
-      problem.AddParameterBlock(ground_block.data(), 7, &manifold);
-    }
-    auto* cost = new ceres::AutoDiffCostFunction<ContactFactor, 4, 7, 7>(new ContactFactor(e));
-    problem.AddResidualBlock(cost, makeLoss(config.contact_loss), a->data(), b->data());
-    ++summary.contacts;
-  }
-  if (summary.contacts == 0) {
+  StageTwoProblem problem(*T_world_obj, models, priors, ground, config);
+  for (const FeatureContact& c : contacts) summary.contacts += problem.addContact(c) ? 1 : 0;
+  for (const Separation& s : separations) summary.separations += problem.addSeparation(s) ? 1 : 0;
+  if (summary.contacts + summary.separations == 0) {
     summary.status = SolveStatus::kNothingToSolve;  // the priors are the answer
     summary.solved = true;
     for (std::size_t i = 0; i < n; ++i) (*T_world_obj)[i] = priors[i];
     return summary;
   }
-  problem.SetParameterBlockConstant(identity.data());
-  if (uses_constants) {
-    problem.SetParameterBlockConstant(ground_block.data());
-  }
-  const ceres::Solver::Summary s =
-      solveQuietly(&problem, ceres::SPARSE_NORMAL_CHOLESKY, config.max_iterations);
-  summary.status = statusOf(s);
-  summary.solved = usable(summary.status);
-  summary.iterations = static_cast<int>(s.iterations.size());
-  summary.initial_cost = s.initial_cost;
-  summary.final_cost = s.final_cost;
-  for (std::size_t i = 0; i < n; ++i) {
-    (*T_world_obj)[i] = (summary.solved && in_problem[i]) ? objs[i].get() : priors[i];
-  }
+  problem.solve(T_world_obj, &summary);
   return summary;
 }
 

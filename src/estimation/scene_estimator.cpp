@@ -1,6 +1,7 @@
 #include "geofusion/estimation/scene_estimator.h"
 
 #include "geofusion/estimation/refinement_pool.h"
+#include "geofusion/estimation/separation.h"
 
 #include "geofusion/common/enum_names.h"
 #include "geofusion/common/statistics.h"
@@ -12,6 +13,7 @@
 #include <cctype>
 #include <chrono>
 #include <cmath>
+#include <set>
 
 namespace geofusion {
 namespace {
@@ -168,6 +170,7 @@ void SceneEstimator::reset() {
   contacts_.clear();
   contacts_by_id_.clear();
   held_contacts_.clear();
+  separations_by_id_.clear();
   frame_objects_.clear();
   monitor_.reset();
 }
@@ -832,31 +835,103 @@ StageReport SceneEstimator::runRelationsAndStageTwo(const Keyframe* kf, StageTim
   if (timings) timings->relations_ms = msSince(t0);
 
   t0 = Clock::now();
-  std::vector<Eigen::Isometry3d> poses, priors;
-  std::vector<const ObjectModel*> models;
-  for (std::size_t i : local) {
-    const Track& tr = tracks_[reported[i]];
-    poses.push_back(tr.T_refined);
-    priors.push_back(tr.T_stage_one);
-    models.push_back(tr.symmetryModel());
-  }
-  const StageTwoSummary s = optimizeStageTwo(&poses, models, priors, local_contacts,
-                                             support_model_ ? &ground : nullptr, config_.stage_two);
-  for (std::size_t i = 0; i < local.size(); ++i) {
-    Track& tr = tracks_[reported[local[i]]];
-    tr.T_refined = poses[i];
-    // Nothing stays in the table: an estimate through its top deeper than a contact can
-    // resolve rests on it instead.
-    if (!config_.stage_two.lift_out_of_support) continue;
-    const double depth = depthThroughPlane(support_, *tr.model, tr.T_refined);
-    if (depth > config_.contacts.max_penetration_m)
-      tr.T_refined.translation() += depth * support_.normal;
-  }
+  const StageTwoSummary s =
+      solveStageTwo(local, reported, local_contacts, support_model_ ? &ground : nullptr);
   // Candidates follow their stage I / initial pose.
   for (Track& tr : tracks_)
     if (!tr.confirmed) tr.T_refined = tr.T_stage_one;
   if (timings) timings->stage_two_ms = msSince(t0);
   return {s.status, s.iterations, s.initial_cost, s.final_cost};
+}
+
+namespace {
+
+// How far the pair of a separation is from parting (negative: parted by that much), at the poses
+// of its bodies (`T_a` for the ground: its block's pose).
+double shortOfParting(const Separation& s, const Eigen::Isometry3d& T_a,
+                      const Eigen::Isometry3d& T_b, double margin_m) {
+  return s.depth + margin_m - s.normal.dot(T_b * s.p_b - T_a * s.p_a);
+}
+
+}  // namespace
+
+StageTwoSummary SceneEstimator::solveStageTwo(const std::vector<std::size_t>& local,
+                                              const std::vector<std::size_t>& reported,
+                                              const std::vector<FeatureContact>& contacts,
+                                              const PosedModel* ground) {
+  std::vector<Eigen::Isometry3d> poses, priors;
+  std::vector<const ObjectModel*> models;
+  std::vector<Track*> solved;
+  std::map<int, int> index_of_id = {{-1, -1}};
+  for (std::size_t i : local) {
+    Track& tr = tracks_[reported[i]];
+    index_of_id[tr.id] = static_cast<int>(solved.size());
+    poses.push_back(tr.T_refined);
+    priors.push_back(tr.T_stage_one);
+    models.push_back(tr.symmetryModel());
+    solved.push_back(&tr);
+  }
+  const StageTwoConfig& config = config_.stage_two;
+  std::vector<Separation> separations;  // local indices
+  for (Separation s : separations_by_id_) {
+    const auto a = index_of_id.find(s.object_a), b = index_of_id.find(s.object_b);
+    if (config.separation_rounds == 0 || a == index_of_id.end() || b == index_of_id.end() ||
+        (s.object_a < 0 && !ground))
+      continue;
+    s.object_a = a->second, s.object_b = b->second;
+    separations.push_back(s);
+  }
+  StageTwoSummary s;
+  for (int round = 0; round <= config.separation_rounds; ++round) {
+    if (round > 0) {  // what still interpenetrates parts, and stage II is solved again
+      std::vector<CollisionBody> bodies;
+      for (const Track* tr : solved) bodies.push_back({tr->model, tr->T_refined});
+      const std::vector<Separation> found =
+          findInterpenetrations(bodies, ground ? &support_ : nullptr, T_map_support_,
+                                config.separation_min_depth_m, collider_.get());
+      if (found.empty()) break;
+      separations.insert(separations.end(), found.begin(), found.end());
+      for (std::size_t i = 0; i < solved.size(); ++i) poses[i] = solved[i]->T_refined;
+    }
+    s = optimizeStageTwo(&poses, models, priors, contacts, ground, config, separations);
+    for (std::size_t i = 0; i < solved.size(); ++i) {
+      solved[i]->T_refined = poses[i];
+      liftOutOfSupport(solved[i]);
+    }
+  }
+  keepSeparations(separations, solved);
+  return s;
+}
+
+// Nothing stays in the table: an estimate through its top deeper than a contact can resolve
+// rests on it instead.
+void SceneEstimator::liftOutOfSupport(Track* track) const {
+  if (!config_.stage_two.lift_out_of_support) return;
+  const double depth = depthThroughPlane(support_, *track->model, track->T_refined);
+  if (depth > config_.contacts.max_penetration_m)
+    track->T_refined.translation() += depth * support_.normal;
+}
+
+// The separations among `solved` (local indices) replace those carried between them; one within
+// a centimetre of parting is carried on (by track ids).
+void SceneEstimator::keepSeparations(const std::vector<Separation>& separations,
+                                     const std::vector<Track*>& solved) {
+  std::set<int> in_solve = {-1};
+  for (const Track* tr : solved) in_solve.insert(tr->id);
+  std::vector<Separation> kept;
+  for (const Separation& s : separations_by_id_)
+    if (!in_solve.count(s.object_a) || !in_solve.count(s.object_b)) kept.push_back(s);
+  for (Separation s : separations) {
+    const Track& b = *solved[static_cast<std::size_t>(s.object_b)];
+    const Eigen::Isometry3d T_a =
+        s.object_a < 0 ? T_map_support_ : solved[static_cast<std::size_t>(s.object_a)]->T_refined;
+    if (shortOfParting(s, T_a, b.T_refined, config_.stage_two.separation_margin_m) < -0.01)
+      continue;
+    s.object_a = s.object_a < 0 ? -1 : solved[static_cast<std::size_t>(s.object_a)]->id;
+    s.object_b = b.id;
+    kept.push_back(s);
+  }
+  separations_by_id_ = kept;
 }
 
 KeyframeResult SceneEstimator::snapshot() const {

@@ -34,16 +34,29 @@ std::shared_ptr<fcl::CollisionGeometryd> fclHull(const ObjectModel& model) {
   return fclConvex(collisionHullOf(model));
 }
 
-double fclPenetration(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b) {
+namespace {
+
+// FCL's deepest contact of two collision objects (FCL: the normal points from a to b).
+HullContact fclContact(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b) {
   fcl::CollisionRequestd request(1, true);
   request.gjk_solver_type = fcl::GST_LIBCCD;
   fcl::CollisionResultd result;
   fcl::collide(a, b, request, result);
-  if (!result.isCollision()) return 0.0;
-  double depth = 0.0;
-  for (std::size_t k = 0; k < result.numContacts(); ++k)
-    depth = std::max(depth, result.getContact(k).penetration_depth);
-  return depth;
+  HullContact out;
+  for (std::size_t k = 0; k < result.numContacts(); ++k) {
+    const fcl::Contactd& c = result.getContact(k);
+    if (c.penetration_depth <= out.depth) continue;
+    out.depth = c.penetration_depth;
+    out.normal = c.normal.normalized();
+    out.point = c.pos;
+  }
+  return out;
+}
+
+}  // namespace
+
+double fclPenetration(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b) {
+  return fclContact(a, b).depth;
 }
 
 double fclDistance(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b) {
@@ -62,6 +75,7 @@ struct HullCollider::Impl {
   };
   std::map<std::shared_ptr<const ObjectModel>, std::shared_ptr<fcl::CollisionGeometryd>> hulls;
   std::map<std::shared_ptr<const ObjectModel>, std::vector<Part>> parts;
+  std::map<std::shared_ptr<const ObjectModel>, double> reach;
   std::shared_ptr<fcl::CollisionGeometryd> hull(const std::shared_ptr<const ObjectModel>& m) {
     auto it = hulls.find(m);
     if (it != hulls.end()) return it->second;
@@ -128,6 +142,26 @@ double HullCollider::penetration(const std::shared_ptr<const ObjectModel>& a,
                                  const std::shared_ptr<const ObjectModel>& b,
                                  const Eigen::Isometry3d& T_world_b) {
   return onHulls(impl_.get(), a, T_world_a, b, T_world_b, fclPenetration);
+}
+
+HullContact HullCollider::contact(const std::shared_ptr<const ObjectModel>& a,
+                                  const Eigen::Isometry3d& T_world_a,
+                                  const std::shared_ptr<const ObjectModel>& b,
+                                  const Eigen::Isometry3d& T_world_b) {
+  if (!a || !b) return {};
+  fcl::CollisionObjectd oa(impl_->hull(a), fcl::Transform3d(T_world_a.matrix()));
+  fcl::CollisionObjectd ob(impl_->hull(b), fcl::Transform3d(T_world_b.matrix()));
+  return fclContact(&oa, &ob);
+}
+
+double HullCollider::reach(const std::shared_ptr<const ObjectModel>& model) {
+  if (!model) return 0.0;
+  auto it = impl_->reach.find(model);
+  if (it != impl_->reach.end()) return it->second;
+  double r = 0.0;
+  for (const auto& v : collisionHullOf(*model).vertices) r = std::max(r, double(v.norm()));
+  impl_->reach[model] = r;
+  return r;
 }
 
 double HullCollider::partsPenetration(const std::shared_ptr<const ObjectModel>& a,

@@ -4,6 +4,7 @@
 #include "geofusion/estimation/factors/contact_factor.h"
 #include "geofusion/estimation/factors/pose_block.h"
 #include "geofusion/estimation/factors/relative_pose_factor.h"
+#include "geofusion/estimation/factors/separation_factor.h"
 #include "geofusion/estimation/optimization.h"
 
 #include "test_geometry.h"
@@ -166,6 +167,31 @@ TEST(ContactFactor, JacobiansMatchNumericDifferentiation) {
           << toString(type) << " trial " << trial;
     }
   }
+}
+
+// Two bodies found 4 mm into each other at a point; b must leave a along +x.
+TEST(SeparationFactor, OneSidedAlongTheNormal) {
+  SeparationFactor f;
+  f.p_a = Eigen::Vector3d(0.05, 0, 0), f.p_b = Eigen::Vector3d(-0.046, 0, 0);
+  f.normal = Eigen::Vector3d::UnitX(), f.depth = 0.004, f.weight = 1000.0;
+  const auto residual = [&](const Eigen::Isometry3d& Ta, const Eigen::Isometry3d& Tb) {
+    const PoseBlock a = PoseBlock::of(Ta), b = PoseBlock::of(Tb);
+    double r = -1.0;
+    EXPECT_TRUE(f(a.data(), b.data(), &r));
+    return r;
+  };
+  const Eigen::Isometry3d A = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d B = Eigen::Isometry3d::Identity();
+  B.translation() = Eigen::Vector3d(0.096, 0, 0);  // where it was found: the full depth
+  EXPECT_NEAR(residual(A, B), 4.0, 1e-9);
+  B.translation().x() = 0.098;  // half way out
+  EXPECT_NEAR(residual(A, B), 2.0, 1e-9);
+  B.translation() = Eigen::Vector3d(0.096, 0.05, 0.02);  // along the contact: no help
+  EXPECT_NEAR(residual(A, B), 4.0, 1e-9);
+  B.translation() = Eigen::Vector3d(0.100, 0, 0);  // touching
+  EXPECT_NEAR(residual(A, B), 0.0, 1e-9);
+  B.translation() = Eigen::Vector3d(0.150, 0, 0);  // apart: never pulled together
+  EXPECT_EQ(residual(A, B), 0.0);
 }
 
 TEST(SolveStatus, OnlyUsableOutcomesAreUsedAndNamesRoundTrip) {

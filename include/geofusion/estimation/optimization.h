@@ -187,6 +187,24 @@ struct StageTwoConfig {
   /// contacts until seen again (their cost stays bounded on long runs). 0: every object, every
   /// keyframe. The final solve of a run (finish) takes every object.
   int local_map_keyframes = 60;
+  /// Issue 50: nothing interpenetrates. After the solve, estimates whose collision hulls
+  /// interpenetrate deeper than separation_min_depth_m (FCL, the support plane's box included)
+  /// get a separation factor (factors/separation_factor.h: part along the contact normal by the
+  /// depth plus separation_margin_m, weight 1 / separation_sigma_m) and stage II is solved again
+  /// with them, up to separation_rounds times (0: off).
+  int separation_rounds = 2;
+  double separation_min_depth_m = 0.0005;
+  double separation_margin_m = 0.0003;
+  double separation_sigma_m = 0.0001;
+};
+
+/// A separation factor's data (SeparationFactor): the contact point in each body's frame (object
+/// index -1 = the ground), the normal from a to b in the world and the depth to part by.
+struct Separation {
+  int object_a = -1, object_b = -1;
+  Eigen::Vector3d p_a = Eigen::Vector3d::Zero(), p_b = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+  double depth = 0.0;
 };
 
 struct StageTwoSummary {
@@ -194,16 +212,19 @@ struct StageTwoSummary {
   SolveStatus status = SolveStatus::kNotRun;
   int iterations = 0;
   int contacts = 0;
+  int separations = 0;  ///< separation factors in the last solve
   double initial_cost = 0.0;
   double final_cost = 0.0;
 };
 
 /// Stage II over the object poses `T_world_obj` (in/out), pulled to `priors` and to the
-/// `contacts` (object index -1 = the fixed support `ground`, may be null when no contact uses it).
+/// `contacts` (object index -1 = the fixed support `ground`, may be null when no contact uses it)
+/// and kept apart by `separations` (same indices), warm-started from `T_world_obj`.
 StageTwoSummary optimizeStageTwo(std::vector<Eigen::Isometry3d>* T_world_obj,
                                  const std::vector<const ObjectModel*>& models,
                                  const std::vector<Eigen::Isometry3d>& priors,
                                  const std::vector<FeatureContact>& contacts,
-                                 const PosedModel* ground, const StageTwoConfig& config);
+                                 const PosedModel* ground, const StageTwoConfig& config,
+                                 const std::vector<Separation>& separations = {});
 
 }  // namespace geofusion

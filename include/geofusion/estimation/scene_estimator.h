@@ -294,6 +294,17 @@ class SceneEstimator {
   void updateSupportPlane(const Keyframe& keyframe);
   /// Relations and stage II over the local map (`keyframe` null: the final solve, every object).
   StageReport runRelationsAndStageTwo(const Keyframe* keyframe, StageTimings* timings);
+  /// Stage II over the `local` ones of the `reported` tracks (T_refined in/out), each estimate
+  /// through the support plane lifted onto it, with the separations carried from earlier
+  /// keyframes, then solved again with new ones while estimates interpenetrate
+  /// (StageTwoConfig::separation_rounds).
+  StageTwoSummary solveStageTwo(const std::vector<std::size_t>& local,
+                                const std::vector<std::size_t>& reported,
+                                const std::vector<FeatureContact>& contacts,
+                                const PosedModel* ground);
+  void liftOutOfSupport(Track* track) const;
+  void keepSeparations(const std::vector<Separation>& separations,
+                       const std::vector<Track*>& solved);
   KeyframeResult result(int keyframe, double stamp) const;
 
   EstimatorConfig config_;
@@ -325,6 +336,10 @@ class SceneEstimator {
   /// Pairs in contact at the last keyframe, as track ids (-1 = the support), for hysteresis.
   std::vector<std::pair<int, int>> held_contacts_;
   std::vector<ObjectEstimate> frame_objects_;  ///< FbF: this keyframe's detections
+  /// Separations (stage II) as track ids (-1 = the support), carried to the next keyframes
+  /// while the pair stays within a centimetre of parting, so that stage II is solved once a
+  /// keyframe where nothing new interpenetrates.
+  std::vector<Separation> separations_by_id_;
 };
 
 }  // namespace geofusion

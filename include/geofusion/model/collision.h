@@ -17,6 +17,14 @@ struct ObjectModel;
 /// built by hand.
 TriangleMesh collisionHullOf(const ObjectModel& model);
 
+/// Where two posed hulls interpenetrate (FCL's contact): `depth` (0 when apart), the world
+/// `normal` along which b leaves a (from a to b), and the contact `point` in the world.
+struct HullContact {
+  double depth = 0.0;
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+};
+
 /// FCL: interpenetration depth of two posed models' convex collision hulls (0 when apart).
 /// Keeps each model's FCL geometry (keyed by the model, which it keeps alive) for repeated use.
 class HullCollider {
@@ -33,6 +41,14 @@ class HullCollider {
                           const Eigen::Isometry3d& T_world_a,
                           const std::shared_ptr<const ObjectModel>& b,
                           const Eigen::Isometry3d& T_world_b);
+  /// The deepest contact of the two models' hulls (HullContact; depth 0 when apart).
+  HullContact contact(const std::shared_ptr<const ObjectModel>& a,
+                      const Eigen::Isometry3d& T_world_a,
+                      const std::shared_ptr<const ObjectModel>& b,
+                      const Eigen::Isometry3d& T_world_b);
+  /// The radius of the model hull's bounding sphere about the model frame's origin (a cheap
+  /// test before contact()).
+  double reach(const std::shared_ptr<const ObjectModel>& model);
   /// Builds the model's FCL hull and parts now (at start, not at the first contact check).
   void prepare(const std::shared_ptr<const ObjectModel>& model);
   /// Distance between the two hulls, 0 when they touch or intersect.

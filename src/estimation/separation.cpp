@@ -1,0 +1,66 @@
+#include "geofusion/estimation/separation.h"
+
+#include "geofusion/estimation/relations.h"
+#include "geofusion/model/collision.h"
+#include "geofusion/model/object_model.h"
+
+#include <limits>
+
+namespace geofusion {
+namespace {
+
+// The body's hull vertex deepest under the plane, as a separation from the ground (none when it
+// is shallower than `min_depth_m` or outside the plane's extent).
+bool planeSeparation(const CollisionBody& body, int index, const SupportPlane& plane,
+                     const Eigen::Isometry3d& T_world_ground, double min_depth_m, Separation* s) {
+  if (depthThroughPlane(plane, *body.model, body.T_world_obj) <= min_depth_m) return false;
+  const ObjectModel& m = *body.model;
+  const TriangleMesh& hull = m.collision_hull.empty() ? m.mesh : m.collision_hull;
+  double lowest = std::numeric_limits<double>::infinity();
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3f& v : hull.vertices) {
+    const Eigen::Vector3d p = body.T_world_obj * v.cast<double>();
+    const double h = plane.normal.dot(p) - plane.height;
+    if (h < lowest) lowest = h, point = p;
+  }
+  s->object_a = -1, s->object_b = index;
+  s->p_a = T_world_ground.inverse() * point;
+  s->p_b = body.T_world_obj.inverse() * point;
+  s->normal = plane.normal;
+  s->depth = -lowest;
+  return true;
+}
+
+}  // namespace
+
+std::vector<Separation> findInterpenetrations(const std::vector<CollisionBody>& bodies,
+                                              const SupportPlane* plane,
+                                              const Eigen::Isometry3d& T_world_ground,
+                                              double min_depth_m, HullCollider* collider) {
+  std::vector<Separation> out;
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    const CollisionBody& A = bodies[i];
+    if (!A.model) continue;
+    Separation s;
+    if (plane && plane->valid &&
+        planeSeparation(A, static_cast<int>(i), *plane, T_world_ground, min_depth_m, &s))
+      out.push_back(s);
+    for (std::size_t j = i + 1; j < bodies.size(); ++j) {
+      const CollisionBody& B = bodies[j];
+      if (!B.model) continue;
+      const double apart = (A.T_world_obj.translation() - B.T_world_obj.translation()).norm();
+      if (apart > collider->reach(A.model) + collider->reach(B.model)) continue;
+      const HullContact c = collider->contact(A.model, A.T_world_obj, B.model, B.T_world_obj);
+      if (c.depth <= min_depth_m) continue;
+      s.object_a = static_cast<int>(i), s.object_b = static_cast<int>(j);
+      s.p_a = A.T_world_obj.inverse() * c.point;
+      s.p_b = B.T_world_obj.inverse() * c.point;
+      s.normal = c.normal;
+      s.depth = c.depth;
+      out.push_back(s);
+    }
+  }
+  return out;
+}
+
+}  // namespace geofusion
