@@ -517,7 +517,7 @@ class Table {
             "most this often (0: off)",
             [f](GeoFusionConfig& c) { return &f(c)->separation_rounds; });
     real("stage_two.separation_min_depth_m", 0, 0.05,
-         "collision hulls interpenetrating deeper than this get a separation factor, m",
+         "shapes (convex parts) interpenetrating deeper than this get a separation factor, m",
          [f](GeoFusionConfig& c) { return &f(c)->separation_min_depth_m; });
     real("stage_two.separation_margin_m", 0, 0.01,
          "a separation factor parts the pair by its depth plus this, m",

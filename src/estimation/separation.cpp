@@ -50,7 +50,7 @@ std::vector<Separation> findInterpenetrations(const std::vector<CollisionBody>& 
       if (!B.model) continue;
       const double apart = (A.T_world_obj.translation() - B.T_world_obj.translation()).norm();
       if (apart > collider->reach(A.model) + collider->reach(B.model)) continue;
-      const HullContact c = collider->contact(A.model, A.T_world_obj, B.model, B.T_world_obj);
+      const HullContact c = collider->partsContact(A.model, A.T_world_obj, B.model, B.T_world_obj);
       if (c.depth <= min_depth_m) continue;
       s.object_a = static_cast<int>(i), s.object_b = static_cast<int>(j);
       s.p_a = A.T_world_obj.inverse() * c.point;

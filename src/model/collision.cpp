@@ -168,15 +168,23 @@ double HullCollider::partsPenetration(const std::shared_ptr<const ObjectModel>& 
                                       const Eigen::Isometry3d& T_world_a,
                                       const std::shared_ptr<const ObjectModel>& b,
                                       const Eigen::Isometry3d& T_world_b) {
-  if (!a || !b) return 0.0;
+  return partsContact(a, T_world_a, b, T_world_b).depth;
+}
+
+HullContact HullCollider::partsContact(const std::shared_ptr<const ObjectModel>& a,
+                                       const Eigen::Isometry3d& T_world_a,
+                                       const std::shared_ptr<const ObjectModel>& b,
+                                       const Eigen::Isometry3d& T_world_b) {
+  if (!a || !b) return {};
   const fcl::Transform3d Ta(T_world_a.matrix()), Tb(T_world_b.matrix());
-  double deepest = 0.0;
+  HullContact deepest;
   for (const Impl::Part& pa : impl_->partsOf(a)) {
     const Eigen::Vector3d ca = T_world_a * pa.centre;
     for (const Impl::Part& pb : impl_->partsOf(b)) {
       if ((ca - T_world_b * pb.centre).norm() > pa.radius + pb.radius) continue;  // apart
       fcl::CollisionObjectd oa(pa.shape, Ta), ob(pb.shape, Tb);
-      deepest = std::max(deepest, fclPenetration(&oa, &ob));
+      const HullContact c = fclContact(&oa, &ob);
+      if (c.depth > deepest.depth) deepest = c;
     }
   }
   return deepest;

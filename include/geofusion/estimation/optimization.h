@@ -187,8 +187,8 @@ struct StageTwoConfig {
   /// contacts until seen again (their cost stays bounded on long runs). 0: every object, every
   /// keyframe. The final solve of a run (finish) takes every object.
   int local_map_keyframes = 60;
-  /// Issue 50: nothing interpenetrates. After the solve, estimates whose collision hulls
-  /// interpenetrate deeper than separation_min_depth_m (FCL, the support plane's box included)
+  /// Issue 50: nothing interpenetrates. After the solve, estimates whose shapes (convex
+  /// parts) interpenetrate deeper than separation_min_depth_m (FCL; the support plane: the hull)
   /// get a separation factor (factors/separation_factor.h: part along the contact normal by the
   /// depth plus separation_margin_m, weight 1 / separation_sigma_m) and stage II is solved again
   /// with them, up to separation_rounds times (0: off).

@@ -1,5 +1,5 @@
 // Issue 50: estimates that interpenetrate after stage II. FCL (model/collision.h) on the objects'
-// collision hulls, and each hull's lowest point against the support plane; the result feeds stage
+// convex parts, and each hull's lowest point against the support plane; the result feeds stage
 // II's separation factors (optimization.h, Separation).
 #pragma once
 
@@ -22,9 +22,11 @@ struct CollisionBody {
   Eigen::Isometry3d T_world_obj = Eigen::Isometry3d::Identity();
 };
 
-/// Every pair of `bodies` whose hulls interpenetrate deeper than `min_depth_m` (object indices
-/// into `bodies`), and every body deeper than that through a valid `plane` within its extent
-/// (object_a -1; p_a in the frame `T_world_ground` of stage II's ground block), as separations.
+/// Every pair of `bodies` whose shapes (convex parts, HullCollider::partsContact: a hull that
+/// spans a banana's curve is not the banana) interpenetrate deeper than `min_depth_m` (object
+/// indices into `bodies`), and every body deeper than that through a valid `plane` within its
+/// extent (object_a -1; p_a in the frame `T_world_ground` of stage II's ground block), as
+/// separations.
 std::vector<Separation> findInterpenetrations(const std::vector<CollisionBody>& bodies,
                                               const SupportPlane* plane,
                                               const Eigen::Isometry3d& T_world_ground,

@@ -46,6 +46,11 @@ class HullCollider {
                       const Eigen::Isometry3d& T_world_a,
                       const std::shared_ptr<const ObjectModel>& b,
                       const Eigen::Isometry3d& T_world_b);
+  /// The deepest contact over pairs of the two models' convex parts (as partsPenetration()).
+  HullContact partsContact(const std::shared_ptr<const ObjectModel>& a,
+                           const Eigen::Isometry3d& T_world_a,
+                           const std::shared_ptr<const ObjectModel>& b,
+                           const Eigen::Isometry3d& T_world_b);
   /// The radius of the model hull's bounding sphere about the model frame's origin (a cheap
   /// test before contact()).
   double reach(const std::shared_ptr<const ObjectModel>& model);
