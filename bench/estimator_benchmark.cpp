@@ -10,6 +10,7 @@
 // DIR holds the YCB-Video models (default ../shared/data/ycb_video beside the source tree);
 // without them the built-in primitives are used and the output says so.
 #include "geofusion/common/statistics.h"
+#include "geofusion/config/config.h"
 #include "geofusion/estimation/scene_estimator.h"
 #include "geofusion/evaluation/evaluation.h"
 #include "geofusion/evaluation/metrics.h"
@@ -23,6 +24,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -38,6 +40,7 @@ struct Options {
   std::string detector = "densefusion", only;
   ConsistencyConfig consistency;
   AssociationConfig association;
+  std::string params;  ///< --params: the estimator's settings from this configuration file
 };
 
 // False, the usage printed, on an option it does not know.
@@ -74,13 +77,16 @@ bool parse(int argc, char** argv, Options* o) {
       o->seed = static_cast<unsigned>(std::atoi(argv[++i]));
     } else if (a == "--detector" && i + 1 < argc) {
       o->detector = argv[++i];
+    } else if (a == "--params" && i + 1 < argc) {
+      o->params = argv[++i];
     } else {
-      std::fprintf(stderr,
-                   "usage: %s [--models DIR] [--objects N] [--keyframes N] [--seed S] "
-                   "[--detector PRESET] [--method NAME] [--eps-res M] [--eps-out M] "
-                   "[--inlier-centre X] [--outlier-centre X] [--eps-fp X] [--eps-new X] "
-                   "[--threads N] [--render-triangles N] [--render-error M]\n",
-                   argv[0]);
+      std::fprintf(
+          stderr,
+          "usage: %s [--models DIR] [--objects N] [--keyframes N] [--seed S] "
+          "[--detector PRESET] [--method NAME] [--params FILE] [--eps-res M] [--eps-out M] "
+          "[--inlier-centre X] [--outlier-centre X] [--eps-fp X] [--eps-new X] "
+          "[--threads N] [--render-triangles N] [--render-error M]\n",
+          argv[0]);
       return false;
     }
   }
@@ -234,9 +240,19 @@ void benchmarkMethod(Method method, const Options& opts, const ModelSet& models,
                      const Sequence& seq, const std::shared_ptr<OffscreenRenderer>& shared) {
   const ClutterScene& scene = seq.scene;
   EstimatorConfig config;
-  config.method = method;
   config.consistency = opts.consistency;
   config.association = opts.association;
+  if (!opts.params.empty()) {  // the file's estimator settings (of the flags, --threads only)
+    GeoFusionConfig file;
+    ConfigReport report;
+    loadConfigFile(opts.params, &file, &report);
+    for (const std::string& e : report.errors)
+      std::fprintf(stderr, "estimator_benchmark: %s\n", e.c_str());
+    if (!report.ok()) std::exit(2);
+    config = file.estimator;
+    config.consistency.threads = opts.consistency.threads;
+  }
+  config.method = method;
   SceneEstimator estimator(models, config, shared);
   estimator.prepare();  // as the node does when the model set loads: no first-use cost timed
   StageTimes timings;
