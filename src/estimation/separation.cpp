@@ -47,7 +47,8 @@ std::vector<Separation> findInterpenetrations(const std::vector<CollisionBody>& 
       out.push_back(s);
     for (std::size_t j = i + 1; j < bodies.size(); ++j) {
       const CollisionBody& B = bodies[j];
-      if (!B.model) continue;
+      // Two of a class that interpenetrate are likely one object twice: merging's to decide.
+      if (!B.model || B.model->name == A.model->name) continue;
       const double apart = (A.T_world_obj.translation() - B.T_world_obj.translation()).norm();
       if (apart > collider->reach(A.model) + collider->reach(B.model)) continue;
       const HullContact c = collider->partsContact(A.model, A.T_world_obj, B.model, B.T_world_obj);
