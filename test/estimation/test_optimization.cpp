@@ -333,10 +333,16 @@ TEST(StageTwo, SeparationFactorsPartInterpenetratingEstimates) {
   plane.valid = true, plane.height = 0.75, plane.centre = Eigen::Vector3d(0, 0, 0.75);
   plane.size = Eigen::Vector2d(1.2, 0.8);
   const auto box = std::make_shared<ObjectModel>(boxModel(0.1, 0.1, 0.05));
+  auto other = std::make_shared<ObjectModel>(boxModel(0.1, 0.1, 0.05));
+  other->name = "other_box";  // two of one class are left to merging
   HullCollider collider;
   const std::vector<Eigen::Isometry3d> priors = {at(0, 0, 0.775), at(0.094, 0, 0.773)};
+  ASSERT_EQ(findInterpenetrations({{box, priors[0]}, {box, priors[1]}}, &plane,
+                                  ground.posed.T_world_obj, 0.0005, &collider)
+                .size(),
+            1u);  // the table's only
   const std::vector<Separation> found = findInterpenetrations(
-      {{box, priors[0]}, {box, priors[1]}}, &plane, ground.posed.T_world_obj, 0.0005, &collider);
+      {{box, priors[0]}, {other, priors[1]}}, &plane, ground.posed.T_world_obj, 0.0005, &collider);
   ASSERT_EQ(found.size(), 2u);
   const Separation& pair = found[0].object_a == 0 ? found[0] : found[1];
   const Separation& table = found[0].object_a == 0 ? found[1] : found[0];
@@ -347,21 +353,21 @@ TEST(StageTwo, SeparationFactorsPartInterpenetratingEstimates) {
   EXPECT_EQ(table.object_b, 1);
   EXPECT_NEAR(table.depth, 0.002, 1e-6);
   EXPECT_NEAR(table.normal.z(), 1.0, 1e-9);
-  std::vector<const ObjectModel*> models = {box.get(), box.get()};
-  const auto contacts = inferRelations({{box.get(), priors[0]}, {box.get(), priors[1]}},
+  std::vector<const ObjectModel*> models = {box.get(), other.get()};
+  const auto contacts = inferRelations({{box.get(), priors[0]}, {other.get(), priors[1]}},
                                        &ground.posed, kGravity, ContactConfig());
   std::vector<Eigen::Isometry3d> poses = priors;
   const StageTwoSummary s =
       optimizeStageTwo(&poses, models, priors, contacts, &ground.posed, StageTwoConfig(), found);
   ASSERT_TRUE(s.solved);
   EXPECT_EQ(s.separations, 2);
-  EXPECT_LT(collider.contact(box, poses[0], box, poses[1]).depth, 0.0002);
+  EXPECT_LT(collider.contact(box, poses[0], other, poses[1]).depth, 0.0002);
   EXPECT_GT(poses[1].translation().x() - poses[0].translation().x(), 0.0995);
   for (const Eigen::Isometry3d& T : poses) EXPECT_NEAR(T.translation().z(), 0.775, 3e-4);
   // Without them the pair stays as it was.
   poses = priors;
   optimizeStageTwo(&poses, models, priors, contacts, &ground.posed, StageTwoConfig());
-  EXPECT_NEAR(collider.contact(box, poses[0], box, poses[1]).depth, 0.006, 5e-4);
+  EXPECT_NEAR(collider.contact(box, poses[0], other, poses[1]).depth, 0.006, 5e-4);
 }
 
 TEST(StageTwo, CanLyingOnABoxTouchesIt) {
