@@ -210,11 +210,14 @@ std::shared_ptr<ObjectModel> supportPlaneModel(const SupportPlane& plane,
 
 std::pair<double, double> hullHeightsAbove(const ObjectModel& model,
                                            const Eigen::Isometry3d& T_map_obj,
-                                           const Eigen::Vector3d& normal, double height) {
+                                           const Eigen::Vector3d& normal, double height,
+                                           Eigen::Vector3d* lowest_point) {
   double lowest = std::numeric_limits<double>::infinity(), highest = -lowest;
   const TriangleMesh& hull = model.collision_hull.empty() ? model.mesh : model.collision_hull;
   for (const Eigen::Vector3f& v : hull.vertices) {
-    const double h = normal.dot(T_map_obj * v.cast<double>()) - height;
+    const Eigen::Vector3d p = T_map_obj * v.cast<double>();
+    const double h = normal.dot(p) - height;
+    if (h < lowest && lowest_point) *lowest_point = p;
     lowest = std::min(lowest, h), highest = std::max(highest, h);
   }
   return {lowest, highest};

@@ -4,8 +4,6 @@
 #include "geofusion/model/collision.h"
 #include "geofusion/model/object_model.h"
 
-#include <limits>
-
 namespace geofusion {
 namespace {
 
@@ -14,15 +12,9 @@ namespace {
 bool planeSeparation(const CollisionBody& body, int index, const SupportPlane& plane,
                      const Eigen::Isometry3d& T_world_ground, double min_depth_m, Separation* s) {
   if (depthThroughPlane(plane, *body.model, body.T_world_obj) <= min_depth_m) return false;
-  const ObjectModel& m = *body.model;
-  const TriangleMesh& hull = m.collision_hull.empty() ? m.mesh : m.collision_hull;
-  double lowest = std::numeric_limits<double>::infinity();
   Eigen::Vector3d point = Eigen::Vector3d::Zero();
-  for (const Eigen::Vector3f& v : hull.vertices) {
-    const Eigen::Vector3d p = body.T_world_obj * v.cast<double>();
-    const double h = plane.normal.dot(p) - plane.height;
-    if (h < lowest) lowest = h, point = p;
-  }
+  const double lowest =
+      hullHeightsAbove(*body.model, body.T_world_obj, plane.normal, plane.height, &point).first;
   s->object_a = -1, s->object_b = index;
   s->p_a = T_world_ground.inverse() * point;
   s->p_b = body.T_world_obj.inverse() * point;

@@ -68,10 +68,12 @@ std::shared_ptr<ObjectModel> supportPlaneModel(const SupportPlane& plane,
                                                double thickness_m = 0.03);
 
 /// Signed heights above a plane (unit normal, offset: n.x = height on it) of the lowest and the
-/// highest vertex of a posed model's collision hull (its mesh when it has none).
+/// highest vertex of a posed model's collision hull (its mesh when it has none); the lowest
+/// vertex itself (map frame) in `lowest_point` when given.
 std::pair<double, double> hullHeightsAbove(const ObjectModel& model,
                                            const Eigen::Isometry3d& T_map_obj,
-                                           const Eigen::Vector3d& normal, double height);
+                                           const Eigen::Vector3d& normal, double height,
+                                           Eigen::Vector3d* lowest_point = nullptr);
 
 /// How far an object reaches through the plane, metres (0 when it does not): the depth of its
 /// collision hull's lowest vertex below the plane, for an object whose centre lies over the
