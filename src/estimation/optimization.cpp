@@ -401,18 +401,20 @@ bool contactFactorOf(const FeatureContact& c, const ObjectModel& ma, const Objec
 }
 
 // Stage II's problem: the object pose blocks (warm-started), the fixed support and identity
-// blocks, and the factors; an object joins (with its prior) at its first factor.
+// blocks, and the factors; an object joins (with its prior) at its first factor, a held object
+// as a fixed block (no prior), and a factor between fixed blocks is left out.
 class StageTwoProblem {
  public:
   StageTwoProblem(const std::vector<Eigen::Isometry3d>& T_world_obj,
                   const std::vector<const ObjectModel*>& models,
                   const std::vector<Eigen::Isometry3d>& priors, const PosedModel* ground,
-                  const StageTwoConfig& config)
+                  const StageTwoConfig& config, const std::vector<bool>& held)
       : problem_(ceres_compat::optionsKeepingManifolds()),  // manifold_ is constructed first
         models_(models),
         priors_(priors),
         ground_(ground),
         config_(config),
+        held_(held),
         objs_(T_world_obj.size()),
         in_problem_(T_world_obj.size(), 0) {
     for (std::size_t i = 0; i < objs_.size(); ++i) objs_[i].set(T_world_obj[i]);
@@ -426,7 +428,7 @@ class StageTwoProblem {
       return false;
     PoseBlock *a = block(c.object_a), *b = block(c.object_b);
     const ObjectModel *ma = modelOf(c.object_a), *mb = modelOf(c.object_b);
-    if (!a || !b || !ma || !mb || a == b) return false;
+    if (!a || !b || !ma || !mb || a == b || (fixed(c.object_a) && fixed(c.object_b))) return false;
     ContactFactor e;
     bool swap = false;
     if (!contactFactorOf(c, *ma, *mb, config_, &e, &swap)) return false;
@@ -439,7 +441,8 @@ class StageTwoProblem {
 
   bool addSeparation(const Separation& s) {
     PoseBlock *a = block(s.object_a), *b = block(s.object_b);
-    if (!a || !b || a == b || !(s.depth > 0.0)) return false;
+    if (!a || !b || a == b || !(s.depth > 0.0) || (fixed(s.object_a) && fixed(s.object_b)))
+      return false;
     SeparationFactor f;
     f.p_a = s.p_a, f.p_b = s.p_b, f.normal = s.normal.normalized();
     f.depth = s.depth + config_.separation_margin_m;
@@ -451,7 +454,8 @@ class StageTwoProblem {
     return true;
   }
 
-  // Solves; the objects without a factor take their priors, as do all when the solve fails.
+  // Solves; the objects without a factor take their priors, as do all when the solve fails; the
+  // held ones keep their poses.
   void solve(std::vector<Eigen::Isometry3d>* T_world_obj, StageTwoSummary* summary) {
     problem_.SetParameterBlockConstant(identity_.data());
     if (problem_.HasParameterBlock(ground_block_.data()))
@@ -464,7 +468,8 @@ class StageTwoProblem {
     summary->initial_cost = s.initial_cost;
     summary->final_cost = s.final_cost;
     for (std::size_t i = 0; i < objs_.size(); ++i)
-      (*T_world_obj)[i] = (summary->solved && in_problem_[i]) ? objs_[i].get() : priors_[i];
+      if (!fixed(static_cast<int>(i)))
+        (*T_world_obj)[i] = (summary->solved && in_problem_[i]) ? objs_[i].get() : priors_[i];
   }
 
  private:
@@ -472,6 +477,9 @@ class StageTwoProblem {
     if (index < 0) return ground_ ? &ground_block_ : nullptr;
     return index < static_cast<int>(objs_.size()) ? &objs_[static_cast<std::size_t>(index)]
                                                   : nullptr;
+  }
+  bool fixed(int index) const {  // the ground or a held object
+    return index < 0 || (!held_.empty() && held_[static_cast<std::size_t>(index)]);
   }
   const ObjectModel* modelOf(int index) const {
     if (index < 0) return ground_ ? ground_->model : nullptr;
@@ -489,6 +497,10 @@ class StageTwoProblem {
     if (in_problem_[i]) return;
     problem_.AddParameterBlock(objs_[i].data(), 7, &manifold_);
     in_problem_[i] = 1;
+    if (fixed(index)) {
+      problem_.SetParameterBlockConstant(objs_[i].data());
+      return;
+    }
     Eigen::Vector3d axis;
     const bool free = freeAxis(models_[i], &axis);
     auto* prior = new ceres::AutoDiffCostFunction<RelativePoseFactor, 6, 7, 7>(
@@ -503,6 +515,7 @@ class StageTwoProblem {
   const std::vector<Eigen::Isometry3d>& priors_;
   const PosedModel* ground_;
   const StageTwoConfig& config_;
+  const std::vector<bool>& held_;
   std::vector<PoseBlock> objs_;
   std::vector<char> in_problem_;
   PoseBlock ground_block_, identity_;
@@ -515,20 +528,22 @@ StageTwoSummary optimizeStageTwo(std::vector<Eigen::Isometry3d>* T_world_obj,
                                  const std::vector<Eigen::Isometry3d>& priors,
                                  const std::vector<FeatureContact>& contacts,
                                  const PosedModel* ground, const StageTwoConfig& config,
-                                 const std::vector<Separation>& separations) {
+                                 const std::vector<Separation>& separations,
+                                 const std::vector<bool>& held) {
   StageTwoSummary summary;
   const std::size_t n = T_world_obj->size();
-  if (models.size() != n || priors.size() != n) {
+  if (models.size() != n || priors.size() != n || (!held.empty() && held.size() != n)) {
     summary.status = SolveStatus::kBadInput;
     return summary;
   }
-  StageTwoProblem problem(*T_world_obj, models, priors, ground, config);
+  StageTwoProblem problem(*T_world_obj, models, priors, ground, config, held);
   for (const FeatureContact& c : contacts) summary.contacts += problem.addContact(c) ? 1 : 0;
   for (const Separation& s : separations) summary.separations += problem.addSeparation(s) ? 1 : 0;
   if (summary.contacts + summary.separations == 0) {
     summary.status = SolveStatus::kNothingToSolve;  // the priors are the answer
     summary.solved = true;
-    for (std::size_t i = 0; i < n; ++i) (*T_world_obj)[i] = priors[i];
+    for (std::size_t i = 0; i < n; ++i)
+      if (held.empty() || !held[i]) (*T_world_obj)[i] = priors[i];
     return summary;
   }
   problem.solve(T_world_obj, &summary);

@@ -853,6 +853,27 @@ double shortOfParting(const Separation& s, const Eigen::Isometry3d& T_a,
   return s.depth + margin_m - s.normal.dot(T_b * s.p_b - T_a * s.p_a);
 }
 
+// The objects a re-solve holds (true): all but those of the `found` separations and their
+// neighbours in the `contacts`, which move with them.
+std::vector<bool> heldOutside(const std::vector<Separation>& found,
+                              const std::vector<FeatureContact>& contacts, std::size_t n) {
+  std::vector<bool> moving(n, false);
+  for (const Separation& s : found)
+    for (int i : {s.object_a, s.object_b})
+      if (i >= 0) moving[static_cast<std::size_t>(i)] = true;
+  std::vector<bool> held(n, true);
+  for (std::size_t i = 0; i < n; ++i) held[i] = !moving[i];
+  for (const FeatureContact& c : contacts) {
+    const int a = c.object_a, b = c.object_b;
+    if (a < 0 || b < 0) continue;
+    const std::size_t ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
+    if (ua >= n || ub >= n) continue;
+    if (moving[ua]) held[ub] = false;
+    if (moving[ub]) held[ua] = false;
+  }
+  return held;
+}
+
 }  // namespace
 
 StageTwoSummary SceneEstimator::solveStageTwo(const std::vector<std::size_t>& local,
@@ -882,8 +903,9 @@ StageTwoSummary SceneEstimator::solveStageTwo(const std::vector<std::size_t>& lo
     separations.push_back(s);
   }
   StageTwoSummary s;
+  std::vector<bool> held;  // the first solve: every object
   for (int round = 0; round <= config.separation_rounds; ++round) {
-    if (round > 0) {  // what still interpenetrates parts, and stage II is solved again
+    if (round > 0) {  // what still interpenetrates parts, and its part of the scene is re-solved
       std::vector<CollisionBody> bodies;
       for (const Track* tr : solved) bodies.push_back({tr->model, tr->T_refined});
       const std::vector<Separation> found =
@@ -891,9 +913,19 @@ StageTwoSummary SceneEstimator::solveStageTwo(const std::vector<std::size_t>& lo
                                 config.separation_min_depth_m, collider_.get());
       if (found.empty()) break;
       separations.insert(separations.end(), found.begin(), found.end());
+      held = heldOutside(found, contacts, solved.size());
       for (std::size_t i = 0; i < solved.size(); ++i) poses[i] = solved[i]->T_refined;
     }
-    s = optimizeStageTwo(&poses, models, priors, contacts, ground, config, separations);
+    const StageTwoSummary r =
+        optimizeStageTwo(&poses, models, priors, contacts, ground, config, separations, held);
+    if (round == 0) {
+      s = r;
+    } else {  // a re-solve: its iterations count, the costs stay the first solve's
+      s.iterations += r.iterations;
+      s.separations = r.separations;
+      if (!r.solved) s.status = r.status;
+      if (!r.solved) break;  // the first solve's poses stay
+    }
     for (std::size_t i = 0; i < solved.size(); ++i) {
       solved[i]->T_refined = poses[i];
       liftOutOfSupport(solved[i]);

@@ -219,12 +219,16 @@ struct StageTwoSummary {
 
 /// Stage II over the object poses `T_world_obj` (in/out), pulled to `priors` and to the
 /// `contacts` (object index -1 = the fixed support `ground`, may be null when no contact uses it)
-/// and kept apart by `separations` (same indices), warm-started from `T_world_obj`.
+/// and kept apart by `separations` (same indices), warm-started from `T_world_obj`. The objects
+/// `held` (empty: none; else one flag per object) keep their poses: they are fixed ends of the
+/// factors that reach them, and factors between fixed ends are left out (a re-solve of part of
+/// the scene).
 StageTwoSummary optimizeStageTwo(std::vector<Eigen::Isometry3d>* T_world_obj,
                                  const std::vector<const ObjectModel*>& models,
                                  const std::vector<Eigen::Isometry3d>& priors,
                                  const std::vector<FeatureContact>& contacts,
                                  const PosedModel* ground, const StageTwoConfig& config,
-                                 const std::vector<Separation>& separations = {});
+                                 const std::vector<Separation>& separations = {},
+                                 const std::vector<bool>& held = {});
 
 }  // namespace geofusion

@@ -296,8 +296,10 @@ class SceneEstimator {
   StageReport runRelationsAndStageTwo(const Keyframe* keyframe, StageTimings* timings);
   /// Stage II over the `local` ones of the `reported` tracks (T_refined in/out), each estimate
   /// through the support plane lifted onto it, with the separations carried from earlier
-  /// keyframes, then solved again with new ones while estimates interpenetrate
-  /// (StageTwoConfig::separation_rounds).
+  /// keyframes, then, while estimates interpenetrate (StageTwoConfig::separation_rounds), the
+  /// interpenetrating objects and their contact neighbours solved again with new ones (the rest
+  /// held). The summary is the first solve's with every solve's iterations; a failed re-solve
+  /// gives its status and leaves the poses before it.
   StageTwoSummary solveStageTwo(const std::vector<std::size_t>& local,
                                 const std::vector<std::size_t>& reported,
                                 const std::vector<FeatureContact>& contacts,
