@@ -836,7 +836,7 @@ StageReport SceneEstimator::runRelationsAndStageTwo(const Keyframe* kf, StageTim
 
   t0 = Clock::now();
   const StageTwoSummary s =
-      solveStageTwo(local, reported, local_contacts, support_model_ ? &ground : nullptr);
+      solveStageTwo(local, reported, local_contacts, support_model_ ? &ground : nullptr, !kf);
   // Candidates follow their stage I / initial pose.
   for (Track& tr : tracks_)
     if (!tr.confirmed) tr.T_refined = tr.T_stage_one;
@@ -879,7 +879,7 @@ std::vector<bool> heldOutside(const std::vector<Separation>& found,
 StageTwoSummary SceneEstimator::solveStageTwo(const std::vector<std::size_t>& local,
                                               const std::vector<std::size_t>& reported,
                                               const std::vector<FeatureContact>& contacts,
-                                              const PosedModel* ground) {
+                                              const PosedModel* ground, bool final_solve) {
   std::vector<Eigen::Isometry3d> poses, priors;
   std::vector<const ObjectModel*> models;
   std::vector<Track*> solved;
@@ -910,7 +910,7 @@ StageTwoSummary SceneEstimator::solveStageTwo(const std::vector<std::size_t>& lo
       for (const Track* tr : solved) bodies.push_back({tr->model, tr->T_refined});
       const std::vector<Separation> found =
           findInterpenetrations(bodies, ground ? &support_ : nullptr, T_map_support_,
-                                config.separation_min_depth_m, collider_.get());
+                                config.separation_min_depth_m, collider_.get(), final_solve);
       if (found.empty()) break;
       separations.insert(separations.end(), found.begin(), found.end());
       held = heldOutside(found, contacts, solved.size());
@@ -945,7 +945,7 @@ void SceneEstimator::liftOutOfSupport(Track* track) const {
 }
 
 // The separations among `solved` (local indices) replace those carried between them; one within
-// a centimetre of parting is carried on (by track ids).
+// a centimetre of parting is carried on (by track ids), unless its pair is of one class.
 void SceneEstimator::keepSeparations(const std::vector<Separation>& separations,
                                      const std::vector<Track*>& solved) {
   std::set<int> in_solve = {-1};
@@ -958,6 +958,10 @@ void SceneEstimator::keepSeparations(const std::vector<Separation>& separations,
     const Eigen::Isometry3d T_a =
         s.object_a < 0 ? T_map_support_ : solved[static_cast<std::size_t>(s.object_a)]->T_refined;
     if (shortOfParting(s, T_a, b.T_refined, config_.stage_two.separation_margin_m) < -0.01)
+      continue;
+    // A pair of one class (parted by the final solve) is not carried: merging decides on it.
+    if (s.object_a >= 0 && solved[static_cast<std::size_t>(s.object_a)]->model && b.model &&
+        solved[static_cast<std::size_t>(s.object_a)]->model->name == b.model->name)
       continue;
     s.object_a = s.object_a < 0 ? -1 : solved[static_cast<std::size_t>(s.object_a)]->id;
     s.object_b = b.id;

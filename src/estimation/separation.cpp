@@ -28,7 +28,8 @@ bool planeSeparation(const CollisionBody& body, int index, const SupportPlane& p
 std::vector<Separation> findInterpenetrations(const std::vector<CollisionBody>& bodies,
                                               const SupportPlane* plane,
                                               const Eigen::Isometry3d& T_world_ground,
-                                              double min_depth_m, HullCollider* collider) {
+                                              double min_depth_m, HullCollider* collider,
+                                              bool same_class_pairs) {
   std::vector<Separation> out;
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     const CollisionBody& A = bodies[i];
@@ -40,7 +41,7 @@ std::vector<Separation> findInterpenetrations(const std::vector<CollisionBody>& 
     for (std::size_t j = i + 1; j < bodies.size(); ++j) {
       const CollisionBody& B = bodies[j];
       // Two of a class that interpenetrate are likely one object twice: merging's to decide.
-      if (!B.model || B.model->name == A.model->name) continue;
+      if (!B.model || (!same_class_pairs && B.model->name == A.model->name)) continue;
       const double apart = (A.T_world_obj.translation() - B.T_world_obj.translation()).norm();
       if (apart > collider->reach(A.model) + collider->reach(B.model)) continue;
       const HullContact c = collider->partsContact(A.model, A.T_world_obj, B.model, B.T_world_obj);

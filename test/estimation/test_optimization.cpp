@@ -341,6 +341,11 @@ TEST(StageTwo, SeparationFactorsPartInterpenetratingEstimates) {
                                   ground.posed.T_world_obj, 0.0005, &collider)
                 .size(),
             1u);  // the table's only
+  // The final solve (after the last merge) parts two of one class as well.
+  EXPECT_EQ(findInterpenetrations({{box, priors[0]}, {box, priors[1]}}, &plane,
+                                  ground.posed.T_world_obj, 0.0005, &collider, true)
+                .size(),
+            2u);
   const std::vector<Separation> found = findInterpenetrations(
       {{box, priors[0]}, {other, priors[1]}}, &plane, ground.posed.T_world_obj, 0.0005, &collider);
   ASSERT_EQ(found.size(), 2u);

@@ -299,11 +299,12 @@ class SceneEstimator {
   /// keyframes, then, while estimates interpenetrate (StageTwoConfig::separation_rounds), the
   /// interpenetrating objects and their contact neighbours solved again with new ones (the rest
   /// held). The summary is the first solve's with every solve's iterations; a failed re-solve
-  /// gives its status and leaves the poses before it.
+  /// gives its status and leaves the poses before it. The `final_solve` (after the last merge)
+  /// parts two objects of one class as well.
   StageTwoSummary solveStageTwo(const std::vector<std::size_t>& local,
                                 const std::vector<std::size_t>& reported,
                                 const std::vector<FeatureContact>& contacts,
-                                const PosedModel* ground);
+                                const PosedModel* ground, bool final_solve);
   void liftOutOfSupport(Track* track) const;
   void keepSeparations(const std::vector<Separation>& separations,
                        const std::vector<Track*>& solved);

@@ -23,14 +23,16 @@ struct CollisionBody {
 };
 
 /// Every pair of `bodies` whose shapes (convex parts, HullCollider::partsContact: a hull that
-/// spans a banana's curve is not the banana) interpenetrate, pairs of one class left out (likely
-/// one object twice: the merge decides on their interpenetration), deeper than `min_depth_m`
+/// spans a banana's curve is not the banana) interpenetrate, pairs of one class left out unless
+/// `same_class_pairs` (likely one object twice: the merge decides on their interpenetration; the
+/// final solve, after the last merge, parts them too), deeper than `min_depth_m`
 /// (object indices into `bodies`), and every body deeper than that through a valid `plane` within
 /// its extent (object_a -1; p_a in the frame `T_world_ground` of stage II's ground block), as
 /// separations.
 std::vector<Separation> findInterpenetrations(const std::vector<CollisionBody>& bodies,
                                               const SupportPlane* plane,
                                               const Eigen::Isometry3d& T_world_ground,
-                                              double min_depth_m, HullCollider* collider);
+                                              double min_depth_m, HullCollider* collider,
+                                              bool same_class_pairs = false);
 
 }  // namespace geofusion
