@@ -33,6 +33,8 @@ KEYFRAMES = 80
 # The replays at a rate the estimator keeps up with (slower under the sanitizers: under
 # ThreadSanitizer at 1x the keyframe counts below were not reached).
 RATE = util.throughput_rate(1.0)
+# The waits on the replay's progress grow as the replay is slowed down (under a sanitizer).
+SLOW = 1.0 / RATE
 AUTOSAVE_EVERY = 4  # test/ros/config/autosave.yaml
 AUTOSAVE_DIR = '/tmp/geofusion_autosave_test'  # ... its autosave_prefix's folder
 AUTOSAVE = AUTOSAVE_DIR + '/autosave'
@@ -162,7 +164,7 @@ class CrashTest(unittest.TestCase):
 
     def test_a_crash_resumes_from_the_autosave(self):
         util.play(self.bag, rate=RATE)
-        self.assertTrue(util.wait_until(lambda: self.map_count() >= KEYFRAMES - 2, 30))
+        self.assertTrue(util.wait_until(lambda: self.map_count() >= KEYFRAMES - 2, 30 * SLOW))
         time.sleep(1.0)
         reference = final_objects(self.save('reference'))
         self.assertGreaterEqual(len(reference), 8, 'the uninterrupted run mapped too little')
@@ -171,7 +173,7 @@ class CrashTest(unittest.TestCase):
         pid = manager_pid()
         self.assertIsNotNone(pid, 'no nodelet manager ' + MANAGER)
         player = util.play_async(self.bag, rate=RATE)
-        self.assertTrue(util.wait_until(lambda: self.map_count() - before >= KEYFRAMES // 2, 60))
+        self.assertTrue(util.wait_until(lambda: self.map_count() - before >= KEYFRAMES // 2, 60 * SLOW))
         os.kill(pid, signal.SIGKILL)
         processed = self.map_count() - before
         autosave = util.load_yaml(AUTOSAVE + '.yaml')
@@ -180,13 +182,13 @@ class CrashTest(unittest.TestCase):
         lost = processed - saved['keyframes_total']
         killed_at = self.map_count()
         # The respawned manager reloads the estimator, which resumes and publishes the map.
-        self.assertTrue(util.wait_until(lambda: manager_pid() not in (None, pid), 60),
+        self.assertTrue(util.wait_until(lambda: manager_pid() not in (None, pid), 60 * SLOW),
                         'the nodelet manager was not respawned')
-        self.assertTrue(util.wait_until(lambda: self.map_count() > killed_at + 1, 60),
+        self.assertTrue(util.wait_until(lambda: self.map_count() > killed_at + 1, 60 * SLOW),
                         'the respawned estimator publishes no map')
         resumed_at = self.map_count()
         player.wait()
-        self.assertTrue(util.wait_until(lambda: self.map_count() > resumed_at + 5, 30))
+        self.assertTrue(util.wait_until(lambda: self.map_count() > resumed_at + 5, 30 * SLOW))
         time.sleep(1.0)
         crashed = final_objects(self.save('crashed'))
         print('crash: %d keyframes processed before the kill, the autosave had %d: %d lost '
