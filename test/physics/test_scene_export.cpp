@@ -8,7 +8,9 @@
 #include "test_geometry.h"
 
 #include <gtest/gtest.h>
+#if GEOFUSION_HAVE_SDFORMAT
 #include <sdf/sdf.hh>
+#endif
 
 #include <cmath>
 #include <cstdlib>
@@ -82,6 +84,7 @@ struct Scene {
   }
 };
 
+#if GEOFUSION_HAVE_SDFORMAT
 // ignition::math's pose (libsdformat 9 to 12) or gz::math's (13 and later).
 template <class Pose>
 Eigen::Isometry3d fromSdf(const Pose& p) {
@@ -145,6 +148,7 @@ void loadExported(const std::string& path, const ModelSet& models, LoadedScene* 
     out->collisions[model->Name()] = static_cast<int>(link->CollisionCount());
   }
 }
+#endif
 
 TEST(SceneExport, SdfAndUrdfParseAndTheSdfStandsAsTheMapDoes) {
   const Scene scene;
@@ -175,6 +179,9 @@ TEST(SceneExport, SdfAndUrdfParseAndTheSdfStandsAsTheMapDoes) {
                          std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("root Link: map has 5 child(ren)"), std::string::npos) << text;
 
+#if !GEOFUSION_HAVE_SDFORMAT
+  GTEST_SKIP() << "built without libsdformat (Debian 13 packages none): the SDF is not read back";
+#else
   LoadedScene loaded;
   loadExported(exported.sdf_path, scene.models, &loaded);
   ASSERT_EQ(loaded.bodies.size(), scene.bodies.size());
@@ -211,6 +218,7 @@ TEST(SceneExport, SdfAndUrdfParseAndTheSdfStandsAsTheMapDoes) {
     EXPECT_EQ(before.bodies[i].stable, after.bodies[i].stable) << before.bodies[i].id;
   }
   EXPECT_GT(before.max_translation_m, 0.02);
+#endif
 }
 
 TEST(SceneExport, BadInputIsNamedAndTheRestIsWritten) {
@@ -238,9 +246,11 @@ TEST(SceneExport, BadInputIsNamedAndTheRestIsWritten) {
        {"physics.friction = -1 is out of range", "object_7: no model",
         "003_cracker_box_8: pose not finite", "no_shape_9: no collision shape", "no support plane"})
     EXPECT_NE(all.find(expected), std::string::npos) << expected << " not in\n" << all;
+#if GEOFUSION_HAVE_SDFORMAT
   LoadedScene loaded;
   loadExported(exported.sdf_path, scene.models, &loaded);
   EXPECT_EQ(loaded.bodies.size(), 4u);
+#endif
 
   // A folder that cannot be made: false, and the reason.
   EXPECT_FALSE(physics::exportScene(scene.bodies, &scene.plane, scene.gravity, StabilityConfig(),
