@@ -861,7 +861,7 @@ std::vector<bool> heldOutside(const std::vector<Separation>& found,
   for (const Separation& s : found)
     for (int i : {s.object_a, s.object_b})
       if (i >= 0) moving[static_cast<std::size_t>(i)] = true;
-  std::vector<bool> held(n, true);
+  std::vector<bool> held(n);
   for (std::size_t i = 0; i < n; ++i) held[i] = !moving[i];
   for (const FeatureContact& c : contacts) {
     const int a = c.object_a, b = c.object_b;

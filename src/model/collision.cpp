@@ -144,16 +144,6 @@ double HullCollider::penetration(const std::shared_ptr<const ObjectModel>& a,
   return onHulls(impl_.get(), a, T_world_a, b, T_world_b, fclPenetration);
 }
 
-HullContact HullCollider::contact(const std::shared_ptr<const ObjectModel>& a,
-                                  const Eigen::Isometry3d& T_world_a,
-                                  const std::shared_ptr<const ObjectModel>& b,
-                                  const Eigen::Isometry3d& T_world_b) {
-  if (!a || !b) return {};
-  fcl::CollisionObjectd oa(impl_->hull(a), fcl::Transform3d(T_world_a.matrix()));
-  fcl::CollisionObjectd ob(impl_->hull(b), fcl::Transform3d(T_world_b.matrix()));
-  return fclContact(&oa, &ob);
-}
-
 double HullCollider::reach(const std::shared_ptr<const ObjectModel>& model) {
   if (!model) return 0.0;
   auto it = impl_->reach.find(model);

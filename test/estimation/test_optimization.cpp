@@ -366,7 +366,7 @@ TEST(StageTwo, SeparationFactorsPartInterpenetratingEstimates) {
       optimizeStageTwo(&poses, models, priors, contacts, &ground.posed, StageTwoConfig(), found);
   ASSERT_TRUE(s.solved);
   EXPECT_EQ(s.separations, 2);
-  EXPECT_LT(collider.contact(box, poses[0], other, poses[1]).depth, 0.0002);
+  EXPECT_LT(collider.penetration(box, poses[0], other, poses[1]), 0.0002);
   EXPECT_GT(poses[1].translation().x() - poses[0].translation().x(), 0.0995);
   for (const Eigen::Isometry3d& T : poses) EXPECT_NEAR(T.translation().z(), 0.775, 3e-4);
   // A re-solve of part of the scene: the held box stays exactly where it was, the other box
@@ -376,13 +376,13 @@ TEST(StageTwo, SeparationFactorsPartInterpenetratingEstimates) {
                                                 StageTwoConfig(), found, {true, false});
   ASSERT_TRUE(part.solved);
   EXPECT_TRUE(poses[0].isApprox(priors[0], 1e-12));
-  EXPECT_LT(collider.contact(box, poses[0], other, poses[1]).depth, 0.0002);
+  EXPECT_LT(collider.penetration(box, poses[0], other, poses[1]), 0.0002);
   EXPECT_GT(poses[1].translation().x() - priors[0].translation().x(), 0.0995);
   EXPECT_NEAR(poses[1].translation().z(), 0.775, 3e-4);
   // Without them the pair stays as it was.
   poses = priors;
   optimizeStageTwo(&poses, models, priors, contacts, &ground.posed, StageTwoConfig());
-  EXPECT_NEAR(collider.contact(box, poses[0], other, poses[1]).depth, 0.006, 5e-4);
+  EXPECT_NEAR(collider.penetration(box, poses[0], other, poses[1]), 0.006, 5e-4);
 }
 
 TEST(StageTwo, CanLyingOnABoxTouchesIt) {

@@ -41,11 +41,6 @@ class HullCollider {
                           const Eigen::Isometry3d& T_world_a,
                           const std::shared_ptr<const ObjectModel>& b,
                           const Eigen::Isometry3d& T_world_b);
-  /// The deepest contact of the two models' hulls (HullContact; depth 0 when apart).
-  HullContact contact(const std::shared_ptr<const ObjectModel>& a,
-                      const Eigen::Isometry3d& T_world_a,
-                      const std::shared_ptr<const ObjectModel>& b,
-                      const Eigen::Isometry3d& T_world_b);
   /// The deepest contact over pairs of the two models' convex parts (as partsPenetration()).
   HullContact partsContact(const std::shared_ptr<const ObjectModel>& a,
                            const Eigen::Isometry3d& T_world_a,
