@@ -4,6 +4,7 @@
 #include "geofusion/model/collision.h"
 
 #include <algorithm>
+#include <utility>
 
 namespace geofusion {
 namespace {
@@ -166,7 +167,8 @@ int coMeasuredKeyframes(const ObjectTrack& a, const ObjectTrack& b) {
   return n;
 }
 
-void absorb(const ObjectTrack& dropped, ObjectTrack* kept) {
+void absorb(ObjectTrack* dropped_track, ObjectTrack* kept) {
+  const ObjectTrack& dropped = *dropped_track;
   for (const TrackObservation& o : dropped.observations) {
     const bool clash =
         std::any_of(kept->observations.begin(), kept->observations.end(),
@@ -183,6 +185,13 @@ void absorb(const ObjectTrack& dropped, ObjectTrack* kept) {
   kept->folded.clear();  // folded again from the merged observations
   for (TrackObservation& o : kept->observations) o.folded = false;
   kept->best_consistency = std::max(kept->best_consistency, dropped.best_consistency);
+  kept->prior_measurements += dropped.prior_measurements;
+  // The object keeps the identity it had first (a resumed map's id, the id a planner or the
+  // markers already know): the track that stays may be the younger duplicate.
+  const bool dropped_older =
+      dropped.first_keyframe < kept->first_keyframe ||
+      (dropped.first_keyframe == kept->first_keyframe && dropped.id < kept->id);
+  if (dropped_older) std::swap(kept->id, dropped_track->id);
   kept->first_keyframe = std::min(kept->first_keyframe, dropped.first_keyframe);
   kept->last_keyframe = std::max(kept->last_keyframe, dropped.last_keyframe);
 }
@@ -209,7 +218,7 @@ void mergeOverlapping(std::vector<ObjectTrack>* tracks, const AssociationConfig&
                                       falsePositiveScore(B.best_consistency, B.measurementCount())
                                 : A.depthEvidence() >= B.depthEvidence();
         const std::size_t keep = keep_a ? a : b, drop = keep_a ? b : a;
-        if (same_class) absorb(all[drop], &all[keep]);
+        if (same_class) absorb(&all[drop], &all[keep]);
         removed->push_back({all[drop].id, RemovalReason::kMerged, all[keep].id});
         all.erase(all.begin() + static_cast<std::ptrdiff_t>(drop));
         merged = true;

@@ -503,17 +503,29 @@ TEST_F(LifecycleSteps, OneObjectMappedTwiceIsMergedIntoTheBetterOneWithItsObserv
   };
   mergeOverlapping(
       &tracks, association, &collider, pose, [](const ObjectTrack&) { return true; }, &removed);
-  EXPECT_EQ(ids(tracks), (std::vector<int>{1, 2}));
+  // The better track (1) stays under the older id (0, mapped first): the duplicate's id goes.
+  EXPECT_EQ(ids(tracks), (std::vector<int>{0, 2}));
   ASSERT_EQ(removed.size(), 1u);
-  EXPECT_EQ(removed[0].id, 0);
+  EXPECT_EQ(removed[0].id, 1);
   EXPECT_EQ(removed[0].reason, RemovalReason::kMerged);
-  EXPECT_EQ(removed[0].into, 1);
+  EXPECT_EQ(removed[0].into, 0);
   // One measurement a keyframe: 0..6, the kept track's own at 3 and 4.
   ASSERT_EQ(tracks[0].observations.size(), 7u);
   for (int k = 0; k < 7; ++k) EXPECT_EQ(tracks[0].observations[k].keyframe, k);
   EXPECT_DOUBLE_EQ(tracks[0].observations[3].consistency, 0.95);
   EXPECT_EQ(tracks[0].first_keyframe, 0);
   EXPECT_EQ(tracks[0].last_keyframe, 6);
+  // A resumed object (mapped before the restart, no observations since) found again as a new
+  // duplicate: the map's id and its measurements before the restart stay.
+  std::vector<ObjectTrack> resumed = {track("005_tomato_soup_can", 3, {0, 0, 0}, 0, -1, 0.7),
+                                      track("005_tomato_soup_can", 9, {0.004, 0, 0}, 12, 14, 0.9)};
+  resumed[0].first_keyframe = -1, resumed[0].prior_measurements = 20;
+  removed.clear();
+  mergeOverlapping(
+      &resumed, association, &collider, pose, [](const ObjectTrack&) { return true; }, &removed);
+  EXPECT_EQ(ids(resumed), std::vector<int>{3});
+  EXPECT_EQ(resumed[0].measurementCount(), 23);
+  EXPECT_DOUBLE_EQ(resumed[0].best_consistency, 0.9);
   // Neither seen recently: not checked again.
   std::vector<ObjectTrack> stale = {track("005_tomato_soup_can", 5, {0, 0, 0}, 0, 1, 0.6),
                                     track("005_tomato_soup_can", 6, {0.005, 0, 0}, 0, 1, 0.9)};

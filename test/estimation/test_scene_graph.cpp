@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <map>
 
 namespace geofusion {
@@ -86,8 +87,8 @@ TEST(SupportGraph, LevelLeaningUsesHeightsAndACycleIsBrokenAtTheTop) {
   EXPECT_NE(cycle.warnings[0].find("board #1"), std::string::npos) << cycle.warnings[0];
 }
 
-// The scene's objects still there (not in `taken`) under gravity: the largest motion of any.
-double largestMotionWithout(const ClutterScene& scene, const std::vector<int>& taken) {
+// The scene's objects still there (not in `taken`) under gravity: each one's motion by id.
+std::map<int, double> motionsWithout(const ClutterScene& scene, const std::vector<int>& taken) {
   std::vector<physics::StabilityBody> bodies;
   for (std::size_t i = 0; i < scene.objects.size(); ++i)
     if (std::find(taken.begin(), taken.end(), int(i)) == taken.end())
@@ -95,7 +96,20 @@ double largestMotionWithout(const ClutterScene& scene, const std::vector<int>& t
   const physics::StabilityPlane table{Eigen::Vector3d::UnitZ(), scene.table.height_m};
   const auto result = physics::checkStability(bodies, &table, Eigen::Vector3d(0, 0, -1),
                                               physics::StabilityConfig());
-  return result.max_translation_m;
+  std::map<int, double> motion;
+  for (const physics::BodyMotion& b : result.bodies) motion[b.id] = b.translation_m;
+  return motion;
+}
+
+// What taking `taken` makes the rest do: the largest motion of an object left beyond the one it
+// makes in the whole scene (the settled scene's own creep under this platform's collision shapes
+// is not the removal's doing: Debian 11's bounded hulls creep up to 9 mm where 12's do not).
+double largestMotionCausedBy(const ClutterScene& scene, const std::vector<int>& taken,
+                             const std::map<int, double>& intact) {
+  double worst = 0.0;
+  for (const auto& [id, moved] : motionsWithout(scene, taken))
+    worst = std::max(worst, moved - intact.at(id));
+  return worst;
 }
 
 TEST(SupportGraph, TheGeneratorsStacksComeApartSafelyInPlanOrder) {
@@ -122,15 +136,19 @@ TEST(SupportGraph, TheGeneratorsStacksComeApartSafelyInPlanOrder) {
       std::find_if(g.nodes.begin(), g.nodes.end(),
                    [](const SupportGraphNode& n) { return !n.supports.empty(); });
   ASSERT_NE(supporter, g.nodes.end()) << "seed " << seed << " made no stack";
-  EXPECT_GT(largestMotionWithout(scene, {supporter->id}), 0.005)
+  const std::map<int, double> intact = motionsWithout(scene, {});
+  double creep = 0.0;
+  for (const auto& [id, moved] : intact) creep = std::max(creep, moved);
+  std::printf("seed %u: the whole scene creeps up to %.2f mm\n", seed, 1e3 * creep);
+  EXPECT_GT(largestMotionCausedBy(scene, {supporter->id}, intact), 0.005)
       << supportGraphName(g, supporter->id);
-  // In the plan's order, whatever is left stands after every step (a creep of the settled scene
-  // aside: under 5 mm).
+  // In the plan's order, whatever is left stands after every step: no object moves 5 mm more
+  // than it does with nothing taken.
   std::vector<int> taken;
   for (int id : g.removal_order) {
     taken.push_back(id);
     if (taken.size() == scene.objects.size()) break;
-    EXPECT_LT(largestMotionWithout(scene, taken), 0.005)
+    EXPECT_LT(largestMotionCausedBy(scene, taken, intact), 0.005)
         << "after taking " << supportGraphName(g, id) << " (step " << taken.size() << ")";
   }
 }

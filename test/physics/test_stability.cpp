@@ -136,9 +136,11 @@ void expectSettledSceneStands(const ModelSet& models, int objects, unsigned seed
   EXPECT_EQ(result.checked, int(scene.objects.size()));
   EXPECT_GE(result.stableShare(), min_share);
   for (const auto& m : result.bodies) {
-    // Unstable or not, nothing falls or topples: a creep of a few mm and degrees at most.
+    // Unstable or not, nothing falls or topples (tens of degrees): a creep of a few mm and a
+    // rock of a few degrees at most. Debian 11's coarser hulls (400 support points, no
+    // meshoptimizer error bound) rock a banana on its curved side 7.2 degrees; 12's 4.5.
     EXPECT_LT(m.translation_m, 0.01) << scene.objects[m.id].model->name << " #" << m.id;
-    EXPECT_LT(m.rotation_deg, 6.0) << scene.objects[m.id].model->name << " #" << m.id;
+    EXPECT_LT(m.rotation_deg, 10.0) << scene.objects[m.id].model->name << " #" << m.id;
     if (!m.stable)
       std::cout << "[ stability ] " << scene.objects[m.id].model->name << " #" << m.id << " moves "
                 << 1000 * m.translation_m << " mm, " << m.rotation_deg << " deg\n";

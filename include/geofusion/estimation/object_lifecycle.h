@@ -159,12 +159,14 @@ bool mappedTwice(const ObjectTrack& a, const Eigen::Isometry3d& T_a, const Objec
 int coMeasuredKeyframes(const ObjectTrack& a, const ObjectTrack& b);
 
 /// The observations of `dropped` (same class) taken into `kept`, one per keyframe (kept's own
-/// wins); best consistency and keyframe span combined.
-void absorb(const ObjectTrack& dropped, ObjectTrack* kept);
+/// wins); best consistency, measurements before a resume and keyframe span combined. The merged
+/// object keeps the older identity: when `dropped` was mapped first, the two swap ids.
+void absorb(ObjectTrack* dropped, ObjectTrack* kept);
 
 /// Merging of overlapping tracks until none is mapped twice; a pair neither of which was
 /// `recently_seen` is not checked again. One class: the lower false-positive score stays and
-/// absorbs the other; two classes: the one the depth supported more stays (kMerged).
+/// absorbs the other under the older id; two classes: the one the depth supported more stays
+/// (kMerged).
 void mergeOverlapping(std::vector<ObjectTrack>* tracks, const AssociationConfig& config,
                       HullCollider* collider, const TrackPose& pose,
                       const std::function<bool(const ObjectTrack&)>& recently_seen,
