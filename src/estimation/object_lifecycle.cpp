@@ -26,7 +26,7 @@ bool parseRemovalReason(const std::string& name, RemovalReason* reason) {
 }
 
 double ObjectTrack::depthEvidence() const {
-  double sum = 0.0;
+  double sum = prior_evidence;
   for (const TrackObservation& o : observations) sum += o.consistency;
   return sum;
 }
@@ -186,6 +186,7 @@ void absorb(ObjectTrack* dropped_track, ObjectTrack* kept) {
   for (TrackObservation& o : kept->observations) o.folded = false;
   kept->best_consistency = std::max(kept->best_consistency, dropped.best_consistency);
   kept->prior_measurements += dropped.prior_measurements;
+  kept->prior_evidence += dropped.prior_evidence;
   // The object keeps the identity it had first (a resumed map's id, the id a planner or the
   // markers already know): the track that stays may be the younger duplicate.
   const bool dropped_older =

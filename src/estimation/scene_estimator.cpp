@@ -149,6 +149,7 @@ bool SceneEstimator::resume(const std::vector<ObjectEstimate>& objects,
     tr.confirmed = true;
     tr.best_consistency = o.best_consistency;
     tr.prior_measurements = std::max(0, o.measurements);
+    tr.prior_evidence = tr.prior_measurements * std::max(0.0, o.best_consistency);
     next_id_ = std::max(next_id_, o.id + 1);
   }
   T_map_odom_start_ = T_map_odom;

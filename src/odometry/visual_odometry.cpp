@@ -187,6 +187,7 @@ struct VisualOdometry::Impl {
   Eigen::Isometry3d T_last = Eigen::Isometry3d::Identity(), T_prev = Eigen::Isometry3d::Identity();
   bool have_velocity = false;
   double last_stamp = std::numeric_limits<double>::quiet_NaN();
+  double prev_stamp = std::numeric_limits<double>::quiet_NaN();  ///< T_prev's
   // Where a (re)started map is anchored, and its uncertainty there (MRPT order).
   Eigen::Isometry3d T_anchor = Eigen::Isometry3d::Identity();
   Matrix6d anchor_cov = Matrix6d::Zero();
@@ -207,7 +208,11 @@ struct VisualOdometry::Impl {
                 const Eigen::Isometry3d& T_cam_odom, Matrix6d* H, std::vector<int>* tracked) const;
   VoFit solvePose(const VoFrame& f, const std::vector<int>& match_map, const PinholeIntrinsics& K,
                   const Eigen::Isometry3d& T_pred, bool from_prediction) const;
+  Eigen::Isometry3d predictPose(double stamp_s) const;
   bool plausibleMotion(const Eigen::Isometry3d& T, double stamp_s) const;
+  void recoverByDescriptor(const VoFrame& f, const PinholeIntrinsics& K,
+                           const Eigen::Isometry3d& T_pred, double stamp_s, VoFit* fit,
+                           std::vector<int>* match_map) const;
   Matrix6d composedCovariance(const VoFit& fit, const Eigen::Isometry3d& T,
                               Matrix6d* cov_right) const;
   bool needsKeyframe(const Eigen::Isometry3d& T, int inliers);
@@ -673,6 +678,38 @@ VoFit VisualOdometry::Impl::solvePose(const VoFrame& f, const std::vector<int>& 
   return fit;
 }
 
+// A frame the guided matches could not place, or placed implausibly far from the last pose (a
+// repeated texture, matches locked onto a wrong pose), recovered against the keyframes' map by
+// descriptors alone before the frame is given up: `fit` and `match_map` replaced when that
+// succeeds with a plausible motion, else `fit`'s problem stands.
+void VisualOdometry::Impl::recoverByDescriptor(const VoFrame& f, const PinholeIntrinsics& K,
+                                               const Eigen::Isometry3d& T_pred, double stamp_s,
+                                               VoFit* fit, std::vector<int>* match_map) const {
+  std::vector<int> by_descriptor = matchByDescriptor(f);
+  if (matchCount(by_descriptor) < config.min_inliers) return;
+  VoFit again = solvePose(f, by_descriptor, K, T_pred, false);
+  if (!again.problem.empty() || !plausibleMotion(again.T_cam_odom.inverse(), stamp_s)) return;
+  *fit = std::move(again);
+  *match_map = std::move(by_descriptor);
+}
+
+// The constant-velocity prediction for a frame at `stamp_s`: the last motion, scaled to the time
+// since the last frame (a frame dropped on the way, by the driver or a busy node, doubles it).
+Eigen::Isometry3d VisualOdometry::Impl::predictPose(double stamp_s) const {
+  if (!have_velocity) return T_last;
+  const Eigen::Isometry3d velocity = T_prev.inverse() * T_last;
+  const double dt_last = last_stamp - prev_stamp, dt = stamp_s - last_stamp;
+  const double scale =
+      std::isfinite(dt_last) && dt_last > 1e-6 && std::isfinite(dt) ? dt / dt_last : 1.0;
+  if (std::abs(scale - 1.0) < 0.05 || !(scale > 0.0)) return T_last * velocity;
+  const Eigen::AngleAxisd turn(velocity.linear());
+  Eigen::Isometry3d step = Eigen::Isometry3d::Identity();
+  const double s = std::min(scale, 12.0);  // a long gap (a stop?): at most twelve steps ahead
+  step.linear() = Eigen::AngleAxisd(s * turn.angle(), turn.axis()).toRotationMatrix();
+  step.translation() = s * velocity.translation();
+  return T_last * step;
+}
+
 // An implausible jump from the last pose is a failure, not motion.
 bool VisualOdometry::Impl::plausibleMotion(const Eigen::Isometry3d& T, double stamp_s) const {
   if (!std::isfinite(last_stamp)) return true;
@@ -756,8 +793,7 @@ VoFrameResult VisualOdometry::track(const GrayImageView& gray, const DepthImageV
   // 2D-3D matches to the local map: guided by the constant-velocity prediction, by descriptors
   // alone when lost or when guidance finds too few.
   const bool lost = s.state != TrackingState::kTracking;
-  const Eigen::Isometry3d T_pred =
-      !lost && s.have_velocity ? s.T_last * (s.T_prev.inverse() * s.T_last) : s.T_last;
+  const Eigen::Isometry3d T_pred = lost ? s.T_last : s.predictPose(stamp_s);
   std::vector<int> match_map(f.kps.size(), -1);
   if (!lost) {
     match_map = s.matchGuided(f, K, T_pred, c.match_radius_px);
@@ -778,11 +814,14 @@ VoFrameResult VisualOdometry::track(const GrayImageView& gray, const DepthImageV
     VoFit other = s.solvePose(f, match_map, K, T_pred, false);
     if (other.problem.empty() || other.inliers > fit.inliers) fit = other;
   }
+  // Relocalisation is exempt from the motion check: it is checked against the map.
+  if (fit.problem.empty() && !lost && !s.plausibleMotion(fit.T_cam_odom.inverse(), stamp_s))
+    fit.problem = "implausible motion between frames";
+  if (!fit.problem.empty() && !by_descriptor)
+    s.recoverByDescriptor(f, K, T_pred, stamp_s, &fit, &match_map);
   out.inliers = fit.inliers;
   if (!fit.problem.empty()) return fail(fit.problem);
   const Eigen::Isometry3d T = fit.T_cam_odom.inverse();
-  // Relocalisation is exempt from the motion check: it is checked against the map.
-  if (!lost && !s.plausibleMotion(T, stamp_s)) return fail("implausible motion between frames");
 
   // Tracked: the pose, its uncertainty, the motion model.
   s.last_cov = s.composedCovariance(fit, T, &out.frame_covariance);
@@ -795,6 +834,7 @@ VoFrameResult VisualOdometry::track(const GrayImageView& gray, const DepthImageV
   s.T_prev = lost ? T : s.T_last;
   s.T_last = T;
   s.have_velocity = !lost;
+  s.prev_stamp = s.last_stamp;
   s.last_stamp = stamp_s;
   if (s.needsKeyframe(T, out.inliers)) {
     s.addKeyframe(T, s.last_cov, f, match_map, K);

@@ -140,15 +140,19 @@ TEST(SupportGraph, TheGeneratorsStacksComeApartSafelyInPlanOrder) {
   double creep = 0.0;
   for (const auto& [id, moved] : intact) creep = std::max(creep, moved);
   std::printf("seed %u: the whole scene creeps up to %.2f mm\n", seed, 1e3 * creep);
-  EXPECT_GT(largestMotionCausedBy(scene, {supporter->id}, intact), 0.005)
+  // A fall is centimetres (what a supporter taken first does: 49 mm on seed 3); a tower's creep
+  // is millimetres (seed 3's cracker box standing on a soup can, its pudding box taken: 2.6 mm
+  // before, 8.6 mm after on Debian 11's hulls, 1 s of gravity). The bound lies between them.
+  const double falls = 0.01;
+  EXPECT_GT(largestMotionCausedBy(scene, {supporter->id}, intact), falls)
       << supportGraphName(g, supporter->id);
-  // In the plan's order, whatever is left stands after every step: no object moves 5 mm more
+  // In the plan's order nothing left falls after any step: no object moves a centimetre more
   // than it does with nothing taken.
   std::vector<int> taken;
   for (int id : g.removal_order) {
     taken.push_back(id);
     if (taken.size() == scene.objects.size()) break;
-    EXPECT_LT(largestMotionCausedBy(scene, taken, intact), 0.005)
+    EXPECT_LT(largestMotionCausedBy(scene, taken, intact), falls)
         << "after taking " << supportGraphName(g, id) << " (step " << taken.size() << ")";
   }
 }

@@ -94,6 +94,9 @@ struct ObjectTrack {
   int free_space_keyframes = 0;  ///< keyframes in a row showing free space where it should be
   int last_checked = -1;         ///< keyframe of its last free-space check (rendered)
   int prior_measurements = 0;    ///< measurements made before a resume (saved with the map)
+  /// The depth's support of those measurements: the map keeps their count and the best
+  /// consistency only, so their product stands for it.
+  double prior_evidence = 0.0;
   /// Issue 51, per class reported at this place: the depth's support where two classes competed
   /// (the sum of its model's f_gc) and the detections of it (the object's own class included).
   struct ClassEvidence {
@@ -108,7 +111,8 @@ struct ObjectTrack {
   }
   Eigen::Vector3d box_centre = Eigen::Vector3d::Zero();  ///< model-frame bounding box
   Eigen::Vector3d box_half = Eigen::Vector3d::Zero();
-  /// How much the depth supported it over all its measurements: the sum of their f_gc.
+  /// How much the depth supported it over all its measurements: the sum of their f_gc (with
+  /// prior_evidence for those before a resume).
   double depthEvidence() const;
 };
 
