@@ -300,7 +300,7 @@ class Table {
         "association.eps_new", 1e-4, 0.9, "eps_new: below this likelihood, a new object",
         [f](GeoFusionConfig& c) { return &f(c)->eps_new; }, "eps_new");
     real(
-        "association.eps_fp", 0.05, 1.0, "eps_fp: false-positive score above this: not in the map",
+        "association.eps_fp", 0.001, 1.0, "eps_fp: false-positive score above this: not in the map",
         [f](GeoFusionConfig& c) { return &f(c)->eps_fp; }, "eps_fp");
     integer("association.candidate_timeout_keyframes", 1, 10000,
             "candidates unseen this many keyframes are deleted",

@@ -122,7 +122,7 @@ TEST(Config, BadValuesAreErrorsNamingFileKeyAndAllowedRange) {
     std::string yaml, key, allowed;
   };
   const Case cases[] = {
-      {"association: {eps_fp: 3}", "association.eps_fp", "[0.05, 1]"},
+      {"association: {eps_fp: 3}", "association.eps_fp", "[0.001, 1]"},
       {"stage_one: {max_iterations: 2.5}", "stage_one.max_iterations", "an integer"},
       {"consistency: {eps_res: abc}", "consistency.eps_res", "a number"},
       {"method: orbslam", "method", "one of geofusion, rfront, bslam, fbf, fbfr"},

@@ -287,7 +287,7 @@ def test_bad_input_raises_a_clear_exception(estimator, call, error, message):
 
 
 def test_configuration_errors_are_the_loaders():
-    with pytest.raises(ValueError, match=r'association.eps_fp: expected a number in \[0.05, 1\]'):
+    with pytest.raises(ValueError, match=r'association.eps_fp: expected a number in \[0.001, 1\]'):
         gf.load_config({'association': {'eps_fp': 7}})
     with pytest.warns(UserWarning, match='eps_fpp'):
         gf.load_config({'association': {'eps_fpp': 0.5}})

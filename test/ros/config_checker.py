@@ -77,7 +77,7 @@ class ConfigTest(unittest.TestCase):
         code, log = self.run_node('_params_file:=' + os.path.join(HERE, 'config', 'out_of_range.yaml'))
         self.assertNotEqual(code, 0, log)
         self.assertIn('association.eps_fp', log)
-        self.assertIn('[0.05, 1]', log)
+        self.assertIn('[0.001, 1]', log)
         code, log = self.run_node('_model_set:=no_such_models')
         self.assertNotEqual(code, 0, log)
         self.assertIn("unknown model set 'no_such_models'", log)

@@ -179,7 +179,7 @@ class OfflineRunnerTest(unittest.TestCase):
                             '--bag', self.bag, '--out', os.path.join(self.dir, 'z.yaml')],
                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True)
         self.assertEqual(p.returncode, 2)
-        self.assertIn('association.eps_fp: expected a number in [0.05, 1], got 7.5', p.stderr)
+        self.assertIn('association.eps_fp: expected a number in [0.001, 1], got 7.5', p.stderr)
         self.assertFalse(os.path.exists(os.path.join(self.dir, 'z.yaml')))
         # Every results file says how it was made.
         for method, (rc, out, res) in self.results.items():
