@@ -551,7 +551,8 @@ void SceneEstimatorNode::broadcastObjects(const KeyframeResult& result,
 
 // The last keyframe's object frames again, stamped ahead of now by node.object_frames_tolerance_s
 // (as amcl's transform_tolerance post-dates map -> odom): a lookup at ros::Time::now() works
-// between keyframes; a removed object's frame stops with the keyframe that removed it.
+// between keyframes. A removed object's frame is not sent after the keyframe that removed it;
+// the last re-send before it reaches tolerance_s past that (TF cannot take a frame back).
 void SceneEstimatorNode::republishObjectFrames() {
   std::vector<geometry_msgs::TransformStamped> frames;
   {

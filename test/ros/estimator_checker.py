@@ -45,6 +45,7 @@ class EstimatorReplayTest(unittest.TestCase):
     def setUp(self):
         self.lock = threading.Lock()
         self.maps, self.markers = [], []
+        self.map_received = {}  # a map's stamp -> when (ROS time) it arrived
         rospy.Subscriber(NS + '/object_map', ObjectMap, self.on_map, queue_size=100)
         rospy.Subscriber(NS + '/map_markers', MarkerArray, self.on_markers, queue_size=100)
         self.graphs = []
@@ -123,6 +124,7 @@ class EstimatorReplayTest(unittest.TestCase):
     def on_map(self, msg):
         with self.lock:
             self.maps.append(msg)
+            self.map_received[msg.header.stamp] = rospy.Time.now()
 
     def on_markers(self, msg):
         with self.lock:
@@ -381,12 +383,16 @@ class EstimatorReplayTest(unittest.TestCase):
             drawn = {m.id for m in shown.markers if m.ns == 'objects'}
             self.assertEqual(drawn, {o.id for o in after.objects})
             self.assertFalse(drawn & gone, 'markers left behind for removed objects')
-            # A removed object's TF frame is no longer sent: not there at the new map's time
-            # (unless it comes back to the map later: a candidate confirmed again).
+            # A removed object's TF frame is no longer sent (unless it comes back to the map
+            # later: a candidate confirmed again). Its last re-send, before the map without it
+            # arrived, was post-dated by node.object_frames_tolerance_s (0.2 s): the frame can
+            # be looked up until then, not past it.
             later = {o.id for m in maps if m.header.stamp > after.header.stamp for o in m.objects}
+            with self.lock:
+                arrived = self.map_received[after.header.stamp]
+            past = arrived + rospy.Duration(0.2 + 0.05)
             for i in gone - later:
-                self.assertFalse(self.tf_buffer.can_transform('map', 'object_%d' % i,
-                                                              after.header.stamp),
+                self.assertFalse(self.tf_buffer.can_transform('map', 'object_%d' % i, past),
                                  'object_%d still on TF after its removal' % i)
             if after.objects:  # a reset empties the map too; count removals only
                 removed_on_show += len(gone)
