@@ -704,7 +704,7 @@ Eigen::Isometry3d VisualOdometry::Impl::predictPose(double stamp_s) const {
   if (std::abs(scale - 1.0) < 0.05 || !(scale > 0.0)) return T_last * velocity;
   const Eigen::AngleAxisd turn(velocity.linear());
   Eigen::Isometry3d step = Eigen::Isometry3d::Identity();
-  const double s = std::min(scale, 12.0);  // a long gap (a stop?): at most twelve steps ahead
+  const double s = std::min(scale, 12.0);  // a long gap: at most twelve frames of motion ahead
   step.linear() = Eigen::AngleAxisd(s * turn.angle(), turn.axis()).toRotationMatrix();
   step.translation() = s * velocity.translation();
   return T_last * step;
