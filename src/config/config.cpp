@@ -618,6 +618,24 @@ class Table {
     real(p + "ba_depth_sigma_per_m2", 0, 1,
          "a feature's depth noise in it: this times depth^2, m (0: depth unused)",
          [f](GeoFusionConfig& c) { return &f(c)->ba_depth_sigma_per_m2; });
+    flag(p + "depth_fallback",
+         "a frame the features cannot place is aligned to the last placed frame's depth "
+         "(point-to-plane ICP from the prediction) before it is given up",
+         [f](GeoFusionConfig& c) { return &f(c)->depth_fallback; });
+    real(p + "depth_fallback_max_rmse_m", 0.001, 0.1,
+         "... kept when the point-to-plane RMS of the overlap (each term scaled to 1 m by "
+         "1/depth^2) "
+         "is at most this, m",
+         [f](GeoFusionConfig& c) { return &f(c)->depth_fallback_max_rmse_m; });
+    real(p + "depth_fallback_min_overlap", 0.05, 1,
+         "... and at least this share of the frame's depth points has a partner",
+         [f](GeoFusionConfig& c) { return &f(c)->depth_fallback_min_overlap; });
+    real(p + "depth_fallback_min_constraint", 0, 1,
+         "... and the geometry fixes every direction of motion: the smallest eigenvalue of the "
+         "fit's information per point, about the points' centroid, rotation scaled by their spread "
+         "(a "
+         "bare plane gives 0)",
+         [f](GeoFusionConfig& c) { return &f(c)->depth_fallback_min_constraint; });
   }
   void node() {
     flag("node.publish_map_to_odom", "broadcast map -> odom at every keyframe",

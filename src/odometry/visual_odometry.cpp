@@ -1,6 +1,7 @@
 #include "geofusion/odometry/visual_odometry.h"
 
 #include "geofusion/common/ceres_compat.h"
+#include "geofusion/odometry/depth_alignment.h"
 #include "geofusion/odometry/local_bundle_adjustment.h"
 
 #include <ceres/ceres.h>
@@ -192,6 +193,9 @@ struct VisualOdometry::Impl {
   Eigen::Isometry3d T_anchor = Eigen::Isometry3d::Identity();
   Matrix6d anchor_cov = Matrix6d::Zero();
   Matrix6d last_cov = Matrix6d::Zero();  ///< MRPT order
+  // The last placed frame's depth (a copy), the reference of the depth fallback.
+  std::vector<float> ref_depth;
+  int ref_width = 0, ref_height = 0;
 
   void rebuildLocalMap();
 
@@ -215,6 +219,12 @@ struct VisualOdometry::Impl {
                            std::vector<int>* match_map) const;
   Matrix6d composedCovariance(const VoFit& fit, const Eigen::Isometry3d& T,
                               Matrix6d* cov_right) const;
+  bool placeByDepth(const DepthImageView& depth, const PinholeIntrinsics& K,
+                    const Eigen::Isometry3d& T_pred, double stamp_s, Eigen::Isometry3d* T,
+                    Matrix6d* cov_right, std::string* problem) const;
+  void accept(const Eigen::Isometry3d& T, const Matrix6d& cov_mrpt, double stamp_s, bool lost,
+              VoFrameResult* out);
+  void rememberDepth(const DepthImageView& depth);
   bool needsKeyframe(const Eigen::Isometry3d& T, int inliers);
 
   void addKeyframe(const Eigen::Isometry3d& T, const Matrix6d& cov_mrpt, const VoFrame& f,
@@ -378,6 +388,7 @@ void VisualOdometry::reset(const Eigen::Isometry3d& T_odom_cam) {
   s.anchor_cov.setZero();
   s.last_cov.setZero();
   s.last_stamp = std::numeric_limits<double>::quiet_NaN();
+  s.ref_depth.clear();
 }
 
 // ORB keeps the strongest corners of the whole image, which crowd onto a few high-contrast
@@ -719,6 +730,18 @@ bool VisualOdometry::Impl::plausibleMotion(const Eigen::Isometry3d& T, double st
          rotationAngle(step) <= config.max_turn_rad_s * dt + 0.02;
 }
 
+// The covariance of T (MRPT order): the uncertain pose T_base (MRPT order) composed with the
+// motion from it to T, whose right-perturbation covariance is `cov_right`.
+static Matrix6d composeUncertain(const Eigen::Isometry3d& T_base, const Matrix6d& cov_base,
+                                 const Eigen::Isometry3d& T, const Matrix6d& cov_right) {
+  const Eigen::Isometry3d T_rel = T_base.inverse() * T;
+  const mrpt::poses::CPose3DPDFGaussian rel(toMrpt(T_rel),
+                                            toMrptMatrix(toMrptCovariance(T_rel, cov_right)));
+  const mrpt::poses::CPose3DPDFGaussian pdf =
+      mrpt::poses::CPose3DPDFGaussian(toMrpt(T_base), toMrptMatrix(cov_base)) + rel;
+  return fromMrpt(pdf.cov);
+}
+
 // The fit's covariance relative to the best-tracked keyframe, composed with that keyframe's
 // uncertain pose (MRPT order); `cov_right` receives the fit's own covariance.
 Matrix6d VisualOdometry::Impl::composedCovariance(const VoFit& fit, const Eigen::Isometry3d& T,
@@ -726,14 +749,64 @@ Matrix6d VisualOdometry::Impl::composedCovariance(const VoFit& fit, const Eigen:
   const std::size_t ref = static_cast<std::size_t>(
       std::max_element(fit.tracked.begin(), fit.tracked.end()) - fit.tracked.begin());
   const VoKeyframe& kref = keyframes[ref];
-  const Eigen::Isometry3d T_rel = kref.T_odom_cam.inverse() * T;
   *cov_right =
       config.pixel_sigma * config.pixel_sigma * (fit.H + 1e-9 * Matrix6d::Identity()).inverse();
-  const mrpt::poses::CPose3DPDFGaussian rel(toMrpt(T_rel),
-                                            toMrptMatrix(toMrptCovariance(T_rel, *cov_right)));
-  const mrpt::poses::CPose3DPDFGaussian pdf =
-      mrpt::poses::CPose3DPDFGaussian(toMrpt(kref.T_odom_cam), toMrptMatrix(kref.covariance)) + rel;
-  return fromMrpt(pdf.cov);
+  return composeUncertain(kref.T_odom_cam, kref.covariance, T, *cov_right);
+}
+
+// The depth fallback: the frame's depth aligned to the last placed frame's (ICP from the
+// prediction); its pose and the fit's own covariance when the alignment is accepted, else why not.
+bool VisualOdometry::Impl::placeByDepth(const DepthImageView& depth, const PinholeIntrinsics& K,
+                                        const Eigen::Isometry3d& T_pred, double stamp_s,
+                                        Eigen::Isometry3d* T, Matrix6d* cov_right,
+                                        std::string* problem) const {
+  if (ref_depth.empty() || ref_width != K.width || ref_height != K.height) {
+    *problem = "no earlier depth to align to";
+    return false;
+  }
+  DepthImageView ref;
+  ref.data = ref_depth.data(), ref.width = ref_width, ref.height = ref_height;
+  DepthAlignmentOptions o;
+  o.min_depth_m = config.min_depth_m, o.max_depth_m = config.max_depth_m;
+  o.max_rmse_m = config.depth_fallback_max_rmse_m;
+  o.min_overlap = config.depth_fallback_min_overlap;
+  o.min_constraint = config.depth_fallback_min_constraint;
+  const DepthAlignment a = alignDepth(depth, ref, K, T_last.inverse() * T_pred, o);
+  if (!a.aligned) {
+    *problem = a.problem;
+    return false;
+  }
+  *T = T_last * a.T_target_source;
+  if (!plausibleMotion(*T, stamp_s)) {
+    *problem = "implausible motion";
+    return false;
+  }
+  *cov_right = (a.information + 1e-9 * Matrix6d::Identity()).inverse();
+  return true;
+}
+
+// A placed frame: its pose and uncertainty reported, the motion model moved on.
+void VisualOdometry::Impl::accept(const Eigen::Isometry3d& T, const Matrix6d& cov_mrpt,
+                                  double stamp_s, bool lost, VoFrameResult* out) {
+  last_cov = cov_mrpt;
+  out->pose_valid = true;
+  out->relocalised = lost;
+  out->T_odom_cam = T;
+  out->covariance = rosOrder(last_cov);
+  state = TrackingState::kTracking;
+  lost_frames = 0;
+  T_prev = lost ? T : T_last;
+  T_last = T;
+  have_velocity = !lost;
+  prev_stamp = last_stamp;
+  last_stamp = stamp_s;
+}
+
+// The frame's depth kept as the next depth fallback's reference (only with the fallback on).
+void VisualOdometry::Impl::rememberDepth(const DepthImageView& depth) {
+  if (!config.depth_fallback) return;
+  ref_width = depth.width, ref_height = depth.height;
+  ref_depth.assign(depth.data, depth.data + static_cast<std::size_t>(depth.width) * depth.height);
 }
 
 // A new keyframe when the newest one is tracked poorly (inliers now against inliers on the first
@@ -784,16 +857,38 @@ VoFrameResult VisualOdometry::track(const GrayImageView& gray, const DepthImageV
       return fail("too few features with depth (" + std::to_string(f.with_depth) + ") to start");
     }
     s.startMap(f, stamp_s, &out);
+    s.rememberDepth(depth);
     return finish();
   }
+  const bool lost = s.state != TrackingState::kTracking;
+  const Eigen::Isometry3d T_pred = lost ? s.T_last : s.predictPose(stamp_s);
+  // A frame the features cannot place: by its depth (while tracking), else lost.
+  auto fallBack = [&](const std::string& why) {
+    Eigen::Isometry3d T;
+    Matrix6d cov_right;
+    std::string depth_problem = "depth fallback off";
+    if (lost || !c.depth_fallback ||
+        !s.placeByDepth(depth, K, T_pred, stamp_s, &T, &cov_right, &depth_problem))
+      return fail(why + (lost ? "" : "; depth alignment: " + depth_problem));
+    s.accept(T, composeUncertain(s.T_last, s.last_cov, T, cov_right), stamp_s, false, &out);
+    out.frame_covariance = cov_right;
+    out.by_depth = true;
+    out.problem = why;
+    // Its features (if any) anchor the next frames: a keyframe at the depth's pose.
+    if (f.with_depth >= 2 * c.min_inliers) {
+      s.addKeyframe(T, s.last_cov, f, {}, K);
+      out.T_odom_cam = s.T_last;
+      out.keyframe = true;
+    }
+    s.rememberDepth(depth);
+    return finish();
+  };
   if (f.with_depth < c.min_inliers || f.kps.empty()) {
-    return fail("too few features with depth (" + std::to_string(f.with_depth) + ")");
+    return fallBack("too few features with depth (" + std::to_string(f.with_depth) + ")");
   }
 
   // 2D-3D matches to the local map: guided by the constant-velocity prediction, by descriptors
   // alone when lost or when guidance finds too few.
-  const bool lost = s.state != TrackingState::kTracking;
-  const Eigen::Isometry3d T_pred = lost ? s.T_last : s.predictPose(stamp_s);
   std::vector<int> match_map(f.kps.size(), -1);
   if (!lost) {
     match_map = s.matchGuided(f, K, T_pred, c.match_radius_px);
@@ -804,7 +899,7 @@ VoFrameResult VisualOdometry::track(const GrayImageView& gray, const DepthImageV
   if (by_descriptor) match_map = s.matchByDescriptor(f);
   out.matches = matchCount(match_map);
   if (out.matches < c.min_inliers) {
-    return fail("too few matches to the map (" + std::to_string(out.matches) + ")");
+    return fallBack("too few matches to the map (" + std::to_string(out.matches) + ")");
   }
 
   // The pose: PnP from the prediction, else from minimal sets (the prediction may have misled the
@@ -820,27 +915,19 @@ VoFrameResult VisualOdometry::track(const GrayImageView& gray, const DepthImageV
   if (!fit.problem.empty() && !by_descriptor)
     s.recoverByDescriptor(f, K, T_pred, stamp_s, &fit, &match_map);
   out.inliers = fit.inliers;
-  if (!fit.problem.empty()) return fail(fit.problem);
+  if (!fit.problem.empty()) return fallBack(fit.problem);
   const Eigen::Isometry3d T = fit.T_cam_odom.inverse();
 
   // Tracked: the pose, its uncertainty, the motion model.
-  s.last_cov = s.composedCovariance(fit, T, &out.frame_covariance);
-  out.pose_valid = true;
-  out.relocalised = lost;
-  out.T_odom_cam = T;
-  out.covariance = rosOrder(s.last_cov);
-  s.state = TrackingState::kTracking;
-  s.lost_frames = 0;
-  s.T_prev = lost ? T : s.T_last;
-  s.T_last = T;
-  s.have_velocity = !lost;
-  s.prev_stamp = s.last_stamp;
-  s.last_stamp = stamp_s;
+  Matrix6d cov_right;
+  s.accept(T, s.composedCovariance(fit, T, &cov_right), stamp_s, lost, &out);
+  out.frame_covariance = cov_right;
   if (s.needsKeyframe(T, out.inliers)) {
     s.addKeyframe(T, s.last_cov, f, match_map, K);
     out.T_odom_cam = s.T_last;  // the bundle adjustment's pose of this frame
     out.keyframe = true;
   }
+  s.rememberDepth(depth);
   return finish();
 }
 

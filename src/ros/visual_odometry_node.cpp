@@ -125,6 +125,13 @@ void VisualOdometryNode::onFrame(const sensor_msgs::ImageConstPtr& rgb,
         "pose covariance grew by the restart sigmas (no motion is published for "
         "the jump)");
   }
+  if (r.by_depth) {
+    ++by_depth_;
+    ROS_INFO_STREAM_THROTTLE(warn_period_s_,
+                             "geofusion: visual odometry placed a frame by its "
+                             "depth alone (features: "
+                                 << r.problem << "; " << by_depth_ << " frames so far)");
+  }
   if (r.relocalised) {
     ++relocalisations_;
     ROS_INFO_STREAM("geofusion: visual odometry relocalised against its map");
@@ -180,6 +187,7 @@ void VisualOdometryNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& s
   std::sort(ms.begin(), ms.end());
   status.add("frames", frames_);
   status.add("frames without a pose", lost_);
+  status.add("frames placed by depth alone", by_depth_);
   status.add("frames skipped (input, TF)", skipped_);
   status.add("restarts", restarts_);
   status.add("relocalisations", relocalisations_);

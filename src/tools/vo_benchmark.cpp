@@ -93,7 +93,7 @@ struct VoRun {
   geofusion::CameraRectifier camera;  ///< K and lens of camera_info (distorted images made pinhole)
   std::vector<double> stamps, times, convert_times;
   std::vector<Eigen::Isometry3d> poses;
-  int frames = 0, lost = 0, restarts = 0, keyframes = 0, unusable = 0;
+  int frames = 0, lost = 0, by_depth = 0, restarts = 0, keyframes = 0, unusable = 0;
 };
 
 // One synchronised set through the odometry.
@@ -126,6 +126,12 @@ void trackFrame(const Options& opt, const Pending& set, VoRun* run, std::string*
                 << r.features << " features, " << r.features_with_depth << " with depth, "
                 << r.matches << " matches)\n";
     return;
+  }
+  if (r.by_depth) {
+    ++run->by_depth;
+    if (!opt.quiet)
+      std::cerr << "vo_benchmark: frame " << run->frames << " placed by its depth: " << r.problem
+                << "\n";
   }
   run->stamps.push_back(set.rgb->header.stamp.toSec());
   run->poses.push_back(r.T_odom_cam);
@@ -172,6 +178,7 @@ nlohmann::json resultsJson(const Options& opt, const geofusion::GeoFusionConfig&
   j["frames"] = run.frames;
   j["unusable_frames"] = run.unusable;
   j["lost_frames"] = run.lost;
+  j["depth_frames"] = run.by_depth;
   j["restarts"] = run.restarts;
   j["keyframes"] = run.keyframes;
   j["paired_poses"] = e.pairs;
@@ -198,14 +205,16 @@ void printSummary(const Options& opt, const geofusion::GroundTruth& gt, const Vo
                   const geofusion::TrajectoryErrors& e, const std::string& stem) {
   using namespace geofusion;
   std::printf(
-      "vo_benchmark: %s: %d frames (%d lost, %d restarts, %d keyframes), path %.2f m; ATE RMSE "
+      "vo_benchmark: %s: %d frames (%d lost, %d by depth, %d restarts, %d keyframes), path %.2f "
+      "m; ATE RMSE "
       "%.2f cm (mean %.2f, max %.2f); RPE over 1 s %.2f cm, %.2f deg; time per frame median "
       "%.1f ms, p95 %.1f ms (%d OpenCV thread%s; image conversion %.1f ms more); %s_vo.tum, "
       "%s_vo.json\n",
-      gt.scene_name.c_str(), run.frames, run.lost, run.restarts, run.keyframes, e.length_m,
-      100 * e.ate_rmse_m, 100 * e.ate_mean_m, 100 * e.ate_max_m, 100 * e.rpe_translation_rmse_m,
-      e.rpe_rotation_rmse_deg, percentile(run.times, 0.5), percentile(run.times, 0.95), opt.threads,
-      opt.threads == 1 ? "" : "s", percentile(run.convert_times, 0.5), stem.c_str(), stem.c_str());
+      gt.scene_name.c_str(), run.frames, run.lost, run.by_depth, run.restarts, run.keyframes,
+      e.length_m, 100 * e.ate_rmse_m, 100 * e.ate_mean_m, 100 * e.ate_max_m,
+      100 * e.rpe_translation_rmse_m, e.rpe_rotation_rmse_deg, percentile(run.times, 0.5),
+      percentile(run.times, 0.95), opt.threads, opt.threads == 1 ? "" : "s",
+      percentile(run.convert_times, 0.5), stem.c_str(), stem.c_str());
 }
 
 }  // namespace

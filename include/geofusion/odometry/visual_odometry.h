@@ -4,11 +4,12 @@
 // poses) by projection with a
 // constant-velocity prediction, the pose from PnP with RANSAC (OpenCV) refined by a robust
 // (Huber) reprojection fit in Ceres, keyframes inserted when the tracked share of the reference
-// keyframe falls or the camera has moved enough. Lost tracking (too few features with depth, too
-// few inliers, an implausible jump) is reported; the next frames try to relocalise against the
-// local map by descriptor matching alone, and after `relocalise_frames` failures the map restarts
-// at the last good pose with a covariance jump. Pose uncertainty: the fit's Gauss-Newton
-// covariance, composed along the keyframe chain as uncertain poses (mrpt::poses).
+// keyframe falls or the camera has moved enough. A frame the features cannot place (too few
+// features with depth, too few inliers, an implausible jump) is aligned by its depth to the last
+// placed frame (ICP); failing that it is lost, and reported; the next frames try to relocalise
+// against the local map by descriptor matching alone, and after `relocalise_frames` failures the
+// map restarts at the last good pose with a covariance jump. Pose uncertainty: the fit's
+// Gauss-Newton covariance, composed along the keyframe chain as uncertain poses (mrpt::poses).
 #pragma once
 
 #include "geofusion/common/camera.h"
@@ -55,6 +56,13 @@ struct VisualOdometryConfig {
   int ba_iterations = 5;  ///< solver iterations of each of its two passes
   /// Depth noise of a feature at depth z in the adjustment: this times z^2 (m; 0: depth unused).
   double ba_depth_sigma_per_m2 = 0.005;
+  /// A frame the features cannot place is aligned to the last placed frame's depth
+  /// (point-to-plane ICP, odometry/depth_alignment.h) from the prediction, and kept when the
+  /// surfaces overlap, agree and fix every direction of motion.
+  bool depth_fallback = true;
+  double depth_fallback_max_rmse_m = 0.01;        ///< point-to-plane RMS of the overlap, at most
+  double depth_fallback_min_overlap = 0.5;        ///< share of the frame's points with a partner
+  double depth_fallback_min_constraint = 0.0003;  ///< weakest direction's normalised information
 };
 
 enum class TrackingState { kNotStarted, kTracking, kLost };
@@ -65,7 +73,9 @@ struct VoFrameResult {
   bool pose_valid = false;   ///< T_odom_cam is an estimate for this frame (publish it)
   bool restarted = false;    ///< the map (re)started here: not continuous with earlier poses
   bool relocalised = false;  ///< tracking came back against the existing map
-  bool keyframe = false;     ///< this frame became a keyframe
+  bool by_depth =
+      false;  ///< placed by its depth alone (the features could not: `problem` says why)
+  bool keyframe = false;  ///< this frame became a keyframe
   Eigen::Isometry3d T_odom_cam = Eigen::Isometry3d::Identity();
   /// Pose covariance, odom frame, ROS order: x, y, z, rotation about x, y, z (m^2, rad^2).
   Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Identity();
@@ -77,7 +87,7 @@ struct VoFrameResult {
   int matches = 0;              ///< 2D-3D matches to the local map
   int inliers = 0;              ///< ... consistent with the pose
   double time_ms = 0.0;         ///< wall time of track()
-  std::string problem;          ///< why the pose is not valid (empty when it is)
+  std::string problem;  ///< why the pose is not valid, or why the features could not place it
 };
 
 class VisualOdometry {

@@ -47,7 +47,8 @@ class VisualOdometryNode {
   bool have_last_ = false;
   Eigen::Isometry3d T_last_odom_child_ = Eigen::Isometry3d::Identity();
   VoFrameResult last_;
-  std::size_t frames_ = 0, lost_ = 0, restarts_ = 0, relocalisations_ = 0, skipped_ = 0;
+  std::size_t frames_ = 0, lost_ = 0, by_depth_ = 0, restarts_ = 0, relocalisations_ = 0,
+              skipped_ = 0;
   std::vector<double> recent_ms_;
 
   tf2_ros::Buffer tf_buffer_;
