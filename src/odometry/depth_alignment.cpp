@@ -21,47 +21,58 @@ namespace {
 
 using Cloud = pcl::PointCloud<pcl::PointNormal>;
 
-// Every `stride`-th pixel's point (camera frame) with its surface normal: PCL's integral-image
-// normals on the full-resolution organised cloud (the average 3D gradient over a window of
-// `smoothing_px`, growing with depth, none across depth edges), which the depth noise of single
-// pixels does not tilt (normals from neighbouring pixels alone make a noisy plane look like a
-// curved surface and hide the directions it leaves free).
-Cloud::Ptr cloudWithNormals(const DepthImageView& depth, const PinholeIntrinsics& K, int stride,
-                            double min_depth_m, double max_depth_m, double smoothing_px) {
-  pcl::PointCloud<pcl::PointXYZ>::Ptr full(new pcl::PointCloud<pcl::PointXYZ>);
-  full->width = static_cast<std::uint32_t>(depth.width);
-  full->height = static_cast<std::uint32_t>(depth.height);
-  full->is_dense = false;
+// Points (camera frame) with their surface normals on a grid of `grid` x `grid` pixel blocks,
+// every (stride / grid)-th block taken. Each block's point is its pixels' mean depth at its
+// centre (blocks across a depth edge, a spread over 3 % of the depth, or half empty: none), so
+// a sample carries a block's noise, not a pixel's; the normals are PCL's integral-image normals
+// (the average 3D gradient over `normal_smoothing_px`, none across depth edges) on that grid
+// (normals from single noisy pixels make a bare plane look curved and hide the directions it
+// leaves free). Points nearer the border than the window are left out.
+Cloud::Ptr cloudWithNormals(const DepthImageView& depth, const PinholeIntrinsics& K, int grid,
+                            int stride, const DepthAlignmentOptions& o) {
+  const int g = std::max(1, grid), step = std::max(1, stride / g);
+  pcl::PointCloud<pcl::PointXYZ>::Ptr organised(new pcl::PointCloud<pcl::PointXYZ>);
+  organised->width = static_cast<std::uint32_t>(depth.width / g);
+  organised->height = static_cast<std::uint32_t>(depth.height / g);
+  organised->is_dense = false;
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  full->points.assign(static_cast<std::size_t>(depth.width) * depth.height,
-                      pcl::PointXYZ(nan, nan, nan));
-  for (int v = 0; v < depth.height; ++v) {
-    for (int u = 0; u < depth.width; ++u) {
-      const float z = depth.at(u, v);
-      if (!std::isfinite(z) || z < min_depth_m || z > max_depth_m) continue;
-      const Eigen::Vector3d p = K.backProject(u, v, z);
-      full->at(u, v) = pcl::PointXYZ(static_cast<float>(p.x()), static_cast<float>(p.y()),
-                                     static_cast<float>(p.z()));
+  organised->points.assign(static_cast<std::size_t>(organised->width) * organised->height,
+                           pcl::PointXYZ(nan, nan, nan));
+  for (int bv = 0; bv < static_cast<int>(organised->height); ++bv) {
+    for (int bu = 0; bu < static_cast<int>(organised->width); ++bu) {
+      double sum = 0.0, lo = std::numeric_limits<double>::infinity(), hi = 0.0;
+      int count = 0;
+      for (int v = bv * g; v < (bv + 1) * g; ++v) {
+        for (int u = bu * g; u < (bu + 1) * g; ++u) {
+          const float z = depth.at(u, v);
+          if (!std::isfinite(z) || z < o.min_depth_m || z > o.max_depth_m) continue;
+          sum += z, ++count, lo = std::min<double>(lo, z), hi = std::max<double>(hi, z);
+        }
+      }
+      if (2 * count < g * g || hi - lo > 0.03 * lo) continue;
+      const Eigen::Vector3d p =
+          K.backProject(bu * g + 0.5 * (g - 1), bv * g + 0.5 * (g - 1), sum / count);
+      organised->at(bu, bv) = pcl::PointXYZ(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                                            static_cast<float>(p.z()));
     }
   }
   pcl::PointCloud<pcl::Normal> normals;
   pcl::IntegralImageNormalEstimation<pcl::PointXYZ, pcl::Normal> estimate;
   estimate.setNormalEstimationMethod(estimate.AVERAGE_3D_GRADIENT);
   estimate.setMaxDepthChangeFactor(0.02f);
-  estimate.setNormalSmoothingSize(static_cast<float>(smoothing_px));
+  estimate.setNormalSmoothingSize(static_cast<float>(o.normal_smoothing_px / g));
   estimate.setDepthDependentSmoothing(false);
   // Integral images need no neighbour search; the default for an organised cloud (PCL's
   // OrganizedNeighbor) would fit a projection matrix first and complain about a bare plane.
   estimate.setSearchMethod(
       pcl::search::BruteForce<pcl::PointXYZ>::Ptr(new pcl::search::BruteForce<pcl::PointXYZ>));
-  estimate.setInputCloud(full);
+  estimate.setInputCloud(organised);
   estimate.compute(normals);
   Cloud::Ptr out(new Cloud);
-  const int s = std::max(1, stride);
-  const int margin = static_cast<int>(std::ceil(smoothing_px));  // normals need the whole window
-  for (int v = margin; v < depth.height - margin; v += s) {
-    for (int u = margin; u < depth.width - margin; u += s) {
-      const pcl::PointXYZ& p = full->at(u, v);
+  const int margin = static_cast<int>(std::ceil(o.normal_smoothing_px / g));
+  for (int v = margin; v < static_cast<int>(organised->height) - margin; v += step) {
+    for (int u = margin; u < static_cast<int>(organised->width) - margin; u += step) {
+      const pcl::PointXYZ& p = organised->at(u, v);
       const pcl::Normal& n = normals.at(u, v);
       if (!std::isfinite(p.z) || !std::isfinite(n.normal_x) || !std::isfinite(n.normal_y) ||
           !std::isfinite(n.normal_z))
@@ -166,7 +177,7 @@ Eigen::Isometry3d perturbed(const Eigen::Isometry3d& T, const Vector6d& x) {
 }
 
 // Gauss-Newton on the point-to-plane terms (Cauchy weights at the RMS limit) from the guess;
-// stops when the step is below 0.01 mm and 0.001 deg. False, with the reason, when the terms
+// stops when the step is below 0.1 mm and 0.006 deg. False, with the reason, when the terms
 // leave a direction free or the step is not finite.
 bool pointToPlane(const Cloud& source, const Cloud& target,
                   const pcl::KdTreeFLANN<pcl::PointNormal>& tree, const PinholeIntrinsics& K,
@@ -194,7 +205,7 @@ bool pointToPlane(const Cloud& source, const Cloud& target,
       return false;
     }
     T = perturbed(T, x);
-    if (x.head<3>().norm() < 1e-5 && x.tail<3>().norm() < 1e-5) break;
+    if (x.head<3>().norm() < 1e-4 && x.tail<3>().norm() < 1e-4) break;
   }
   a->T_target_source = T;
   return true;
@@ -234,10 +245,10 @@ DepthAlignment alignDepth(const DepthImageView& source, const DepthImageView& ta
     a.problem = "depth images, camera and guess disagree";
     return a;
   }
-  const Cloud::Ptr src = cloudWithNormals(source, K, options.source_stride, options.min_depth_m,
-                                          options.max_depth_m, options.normal_smoothing_px);
-  const Cloud::Ptr tgt = cloudWithNormals(target, K, options.target_stride, options.min_depth_m,
-                                          options.max_depth_m, options.normal_smoothing_px);
+  const Cloud::Ptr src =
+      cloudWithNormals(source, K, options.normal_grid, options.source_stride, options);
+  const Cloud::Ptr tgt =
+      cloudWithNormals(target, K, options.normal_grid, options.target_stride, options);
   a.points = static_cast<int>(src->size());
   if (src->size() < 100 || tgt->size() < 100) {
     a.problem = "too little depth (" + std::to_string(src->size()) + " and " +

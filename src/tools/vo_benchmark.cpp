@@ -130,8 +130,8 @@ void trackFrame(const Options& opt, const Pending& set, VoRun* run, std::string*
   if (r.by_depth) {
     ++run->by_depth;
     if (!opt.quiet)
-      std::cerr << "vo_benchmark: frame " << run->frames << " placed by its depth: " << r.problem
-                << "\n";
+      std::cerr << "vo_benchmark: frame " << run->frames << " placed by its depth in " << r.time_ms
+                << " ms (features: " << r.problem << ")\n";
   }
   run->stamps.push_back(set.rgb->header.stamp.toSec());
   run->poses.push_back(r.T_odom_cam);

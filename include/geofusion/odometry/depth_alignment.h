@@ -23,8 +23,9 @@ namespace geofusion {
 struct DepthAlignmentOptions {
   double min_depth_m = 0.25;  ///< depth outside [min, max] is not used
   double max_depth_m = 4.0;
-  int source_stride = 8;               ///< every n-th pixel of the moving frame, each direction
-  int target_stride = 4;               ///< ... of the reference frame
+  int source_stride = 8;  ///< every n-th pixel of the moving frame, each direction
+  int target_stride = 4;  ///< ... of the reference frame
+  int normal_grid = 4;    ///< normals on every n-th pixel's grid (both strides multiples)
   double normal_smoothing_px = 10.0;   ///< window of the normals (integral images), pixels
   double max_correspondence_m = 0.05;  ///< ICP pairs farther apart are not used
   int iterations = 30;                 ///< Gauss-Newton steps, at most
