@@ -1,5 +1,7 @@
 #include "geofusion/odometry/depth_alignment.h"
 
+#include "geofusion/common/pose_increment.h"
+
 #include <pcl/features/integral_image_normal.h>
 #include <pcl/kdtree/kdtree_flann.h>
 #include <pcl/point_cloud.h>
@@ -167,15 +169,6 @@ double weakestDirection(const PlaneTerms& terms) {
   return E.eigenvalues()(0);
 }
 
-// exp of a right perturbation (translation, rotation vector).
-Eigen::Isometry3d perturbed(const Eigen::Isometry3d& T, const Vector6d& x) {
-  Eigen::Isometry3d D = Eigen::Isometry3d::Identity();
-  const double angle = x.tail<3>().norm();
-  if (angle > 0.0) D.linear() = Eigen::AngleAxisd(angle, x.tail<3>() / angle).toRotationMatrix();
-  D.translation() = x.head<3>();
-  return T * D;
-}
-
 // Gauss-Newton on the point-to-plane terms (Cauchy weights at the RMS limit) from the guess;
 // stops when the step is below 0.1 mm and 0.006 deg. False, with the reason, when the terms
 // leave a direction free or the step is not finite.
@@ -204,7 +197,7 @@ bool pointToPlane(const Cloud& source, const Cloud& target,
       a->problem = "the alignment's step is not finite";
       return false;
     }
-    T = perturbed(T, x);
+    T = T * poseIncrement(x);
     if (x.head<3>().norm() < 1e-4 && x.tail<3>().norm() < 1e-4) break;
   }
   a->T_target_source = T;

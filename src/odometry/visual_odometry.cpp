@@ -1,6 +1,7 @@
 #include "geofusion/odometry/visual_odometry.h"
 
 #include "geofusion/common/ceres_compat.h"
+#include "geofusion/common/pose_increment.h"
 #include "geofusion/odometry/depth_alignment.h"
 #include "geofusion/odometry/local_bundle_adjustment.h"
 
@@ -52,15 +53,6 @@ Vector6d mrptVector(const Eigen::Isometry3d& T) {
   return v;
 }
 
-/// exp of a small right perturbation (translation, rotation vector).
-Eigen::Isometry3d perturbation(const Vector6d& xi) {
-  Eigen::Isometry3d D = Eigen::Isometry3d::Identity();
-  const double angle = xi.tail<3>().norm();
-  if (angle > 0.0) D.linear() = Eigen::AngleAxisd(angle, xi.tail<3>() / angle).toRotationMatrix();
-  D.translation() = xi.head<3>();
-  return D;
-}
-
 /// Covariance of right perturbations of T, expressed in MRPT's parameters of T (numeric
 /// Jacobian; angles differenced with wrapping).
 Matrix6d toMrptCovariance(const Eigen::Isometry3d& T, const Matrix6d& cov_right) {
@@ -69,7 +61,7 @@ Matrix6d toMrptCovariance(const Eigen::Isometry3d& T, const Matrix6d& cov_right)
   for (int i = 0; i < 6; ++i) {
     Vector6d d = Vector6d::Zero();
     d[i] = h;
-    Vector6d diff = mrptVector(T * perturbation(d)) - mrptVector(T * perturbation(-d));
+    Vector6d diff = mrptVector(T * poseIncrement(d)) - mrptVector(T * poseIncrement(-d));
     for (int k = 3; k < 6; ++k) diff[k] = std::remainder(diff[k], 2.0 * M_PI);
     J.col(i) = diff / (2.0 * h);
   }
