@@ -262,7 +262,8 @@ class PyVisualOdometry {
                     py::arg("T_odom_cam") = matrix(r.T_odom_cam.matrix()),
                     py::arg("covariance") = matrix(r.covariance),
                     py::arg("restarted") = r.restarted, py::arg("relocalised") = r.relocalised,
-                    py::arg("keyframe") = r.keyframe, py::arg("features") = r.features,
+                    py::arg("by_depth") = r.by_depth, py::arg("keyframe") = r.keyframe,
+                    py::arg("features") = r.features,
                     py::arg("features_with_depth") = r.features_with_depth,
                     py::arg("matches") = r.matches, py::arg("inliers") = r.inliers,
                     py::arg("time_ms") = r.time_ms, py::arg("problem") = r.problem);

@@ -199,6 +199,11 @@ def test_visual_odometry_tracks_from_numpy():
     assert second['state'] == 'tracking'
     assert np.abs(second['T_odom_cam'] - np.eye(4)).max() < 1e-3
     assert second['inliers'] >= 25
+    assert second['by_depth'] is False
+    # No texture, and the depth a bare wall: neither features nor the depth fallback can place it.
+    bare = vo.track(np.full_like(grey, 128), depth, stamp=0.067)
+    assert not bare['pose_valid'] and not bare['by_depth']
+    assert 'direction free' in bare['problem'], bare['problem']
     with pytest.raises(ValueError, match='differ in size'):
         vo.track(grey, depth[:100], K_DEMO)
     with pytest.raises(TypeError, match='uint8'):
