@@ -11,6 +11,7 @@ import time
 import unittest
 import xml.etree.ElementTree as ElementTree
 
+import rospkg
 import rospy
 import rostest
 import tf2_ros
@@ -24,6 +25,10 @@ from sensor_msgs.msg import PointCloud2
 from visualization_msgs.msg import Marker, MarkerArray
 
 import geofusion_test_utils as util
+
+# The node's settings: geofusion.launch's default parameter file (the commented template).
+PARAMS = util.load_yaml(os.path.join(rospkg.RosPack().get_path('geofusion'), 'config',
+                                     'scene_estimator.yaml'))
 
 NS = '/scene_estimator'
 KEYFRAMES = 24
@@ -385,12 +390,12 @@ class EstimatorReplayTest(unittest.TestCase):
             self.assertFalse(drawn & gone, 'markers left behind for removed objects')
             # A removed object's TF frame is no longer sent (unless it comes back to the map
             # later: a candidate confirmed again). Its last re-send, before the map without it
-            # arrived, was post-dated by node.object_frames_tolerance_s (0.2 s): the frame can
-            # be looked up until then, not past it.
+            # arrived, was post-dated by node.object_frames_tolerance_s: the frame can be looked
+            # up until then, not past it.
             later = {o.id for m in maps if m.header.stamp > after.header.stamp for o in m.objects}
             with self.lock:
                 arrived = self.map_received[after.header.stamp]
-            past = arrived + rospy.Duration(0.2 + 0.05)
+            past = arrived + rospy.Duration(PARAMS['node']['object_frames_tolerance_s'] + 0.05)
             for i in gone - later:
                 self.assertFalse(self.tf_buffer.can_transform('map', 'object_%d' % i, past),
                                  'object_%d still on TF after its removal' % i)
