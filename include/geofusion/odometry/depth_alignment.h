@@ -40,7 +40,8 @@ struct DepthAlignment {
   /// The moving (source) camera in the reference (target) camera's frame.
   Eigen::Isometry3d T_target_source = Eigen::Isometry3d::Identity();
   /// Gauss-Newton information of the fit for a right perturbation of T_target_source
-  /// (translation, then rotation vector), residuals in metres with the fit's RMS as their sigma.
+  /// (translation, then rotation vector), residuals in metres with the fit's RMS as their sigma,
+  /// counted as at most 100 independent pairs (neighbouring blocks' errors are correlated).
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
   int points = 0;           ///< source points with depth
   double overlap = 0.0;     ///< share of them with a partner after the fit
