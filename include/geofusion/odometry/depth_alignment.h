@@ -1,13 +1,14 @@
 // Frame-to-frame alignment of two depth images of one camera by their geometry alone: the
 // visual odometry's fallback for a frame its features cannot place (close untextured surfaces,
-// motion blur). Point-to-plane ICP from a predicted pose: normals by PCL's integral images on the
-// full-resolution organised cloud (a window of `normal_smoothing_px`), subsampled; pairs by PCL's
-// kd-tree, only where the reference saw the point, away from its border; each term scaled to
-// 1 m by 1/z^2 (a depth camera's noise grows so; the far, noisy floor would otherwise hold the fit
-// near the reference's pose); Gauss-Newton steps with Cauchy weights (PCL's own ICP asserts
-// inside its kd-tree on the NaN pose a degenerate step gives, which would abort a node). The
-// result is accepted only where the surfaces overlap, agree within the noise, and fix all six
-// directions of motion (a bare plane leaves three free, noisy or not: refused before any step).
+// motion blur). Point-to-plane ICP from a predicted pose: points are the mean depth of
+// `normal_grid` x `normal_grid` pixel blocks, normals PCL's integral-image normals on that grid (a
+// window of `normal_smoothing_px`); pairs by PCL's kd-tree, only where the reference saw the point,
+// away from its border; each term scaled to 1 m by 1/z^2 (a depth camera's noise grows so; the far,
+// noisy floor would otherwise hold the fit near the reference's pose); Gauss-Newton steps with
+// Cauchy weights (PCL's own ICP asserts inside its kd-tree on the NaN pose a degenerate step gives,
+// which would abort a node). The result is accepted only where the surfaces overlap, agree within
+// the noise, and fix all six directions of motion (a bare plane leaves three free, noisy or not:
+// refused before any step).
 #pragma once
 
 #include "geofusion/common/camera.h"
@@ -23,9 +24,9 @@ namespace geofusion {
 struct DepthAlignmentOptions {
   double min_depth_m = 0.25;  ///< depth outside [min, max] is not used
   double max_depth_m = 4.0;
-  int source_stride = 8;  ///< every n-th pixel of the moving frame, each direction
+  int source_stride = 8;  ///< a point every n pixels of the moving frame (a multiple of the grid)
   int target_stride = 4;  ///< ... of the reference frame
-  int normal_grid = 4;    ///< normals on every n-th pixel's grid (both strides multiples)
+  int normal_grid = 4;    ///< pixel blocks of this size make the points (mean depth) and normals
   double normal_smoothing_px = 10.0;   ///< window of the normals (integral images), pixels
   double max_correspondence_m = 0.05;  ///< ICP pairs farther apart are not used
   int iterations = 30;                 ///< Gauss-Newton steps, at most
