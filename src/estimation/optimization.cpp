@@ -11,6 +11,9 @@
 
 #include "geofusion/common/ceres_compat.h"
 
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <memory>
@@ -171,6 +174,39 @@ void FoldedMeasurements::add(const Eigen::Isometry3d& T_map_cam, const StageOneM
       m.weight / (config.measurement_sigma_rotation_rad * config.measurement_sigma_rotation_rad);
   rotation_sum_ += w_rotation * R;
   rotation_information_ += w_rotation;
+}
+
+void FoldedMeasurements::add(const FoldedMeasurements& other, const ObjectModel* model) {
+  if (other.empty()) {
+    count_ += other.count_;
+    return;
+  }
+  const Eigen::Matrix3d R_other = other.mean().linear();
+  const Eigen::Matrix3d R =
+      empty() || !model ? R_other : alignToReference(model->symmetry, mean().linear(), R_other);
+  translation_information_ += other.translation_information_;
+  information_vector_ += other.information_vector_;
+  rotation_sum_ += other.rotation_information_ * R;
+  rotation_information_ += other.rotation_information_;
+  count_ += other.count_;
+}
+
+FoldedMeasurements FoldedMeasurements::fromPrior(const Eigen::Isometry3d& mean,
+                                                 const Eigen::Matrix3d& translation_information,
+                                                 double rotation_information, int count) {
+  FoldedMeasurements f;
+  f.count_ = std::max(0, count);
+  const Eigen::Matrix3d I = 0.5 * (translation_information + translation_information.transpose());
+  const bool usable =
+      mean.matrix().allFinite() && I.allFinite() && std::isfinite(rotation_information) &&
+      rotation_information > 0.0 &&
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(I).eigenvalues().minCoeff() > 0.0;
+  if (!usable) return f;
+  f.translation_information_ = I;
+  f.information_vector_ = I * mean.translation();
+  f.rotation_sum_ = rotation_information * mean.linear();
+  f.rotation_information_ = rotation_information;
+  return f;
 }
 
 Eigen::Isometry3d FoldedMeasurements::mean() const {

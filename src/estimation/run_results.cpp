@@ -14,6 +14,34 @@
 namespace geofusion {
 namespace {
 
+// An object's stage I history (a saved map's; ObjectEstimate::history): its folded mean, the
+// translation's information (upper triangle, row by row) and the rotation's.
+void emitHistory(YAML::Emitter& out, const FoldedMeasurements& h) {
+  out << YAML::Key << "stage_one_prior" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "measurements" << YAML::Value << h.count();
+  yaml_io::emitPose(out, "mean", h.mean());
+  const Eigen::Matrix3d& I = h.translationInformation();
+  out << YAML::Key << "translation_information" << YAML::Value << YAML::Flow << YAML::BeginSeq
+      << I(0, 0) << I(0, 1) << I(0, 2) << I(1, 1) << I(1, 2) << I(2, 2) << YAML::EndSeq;
+  out << YAML::Key << "rotation_information" << YAML::Value << h.rotationInformation();
+  out << YAML::EndMap;
+}
+
+FoldedMeasurements readHistory(const YAML::Node& h) {
+  const YAML::Node t = h["translation_information"];
+  if (!t || !t.IsSequence() || t.size() != 6)
+    throw std::runtime_error("stage_one_prior: translation_information needs 6 values");
+  Eigen::Matrix3d I;
+  I << t[0].as<double>(), t[1].as<double>(), t[2].as<double>(), t[1].as<double>(),
+      t[3].as<double>(), t[4].as<double>(), t[2].as<double>(), t[4].as<double>(), t[5].as<double>();
+  const FoldedMeasurements f = FoldedMeasurements::fromPrior(
+      yaml_io::parsePose(h["mean"], "stage_one_prior: mean"), I,
+      h["rotation_information"].as<double>(), h["measurements"].as<int>());
+  if (f.empty())
+    throw std::runtime_error("stage_one_prior: its information is not positive definite");
+  return f;
+}
+
 void emitObjects(YAML::Emitter& out, const std::vector<ObjectEstimate>& objects,
                  const Eigen::Isometry3d& T_map_cam) {
   out << YAML::Key << "objects" << YAML::Value << YAML::BeginSeq;
@@ -29,6 +57,7 @@ void emitObjects(YAML::Emitter& out, const std::vector<ObjectEstimate>& objects,
     out << YAML::Key << "measurements" << YAML::Value << o.measurements;
     yaml_io::emitPose(out, "map_object", o.T_map_obj);
     yaml_io::emitPose(out, "camera_object", T_cam_map * o.T_map_obj);
+    if (!o.history.empty()) emitHistory(out, o.history);
     out << YAML::EndMap;
   }
   out << YAML::EndSeq;
@@ -343,7 +372,17 @@ bool writeRunResults(const std::string& path, const RunResults& r, std::string* 
     out << YAML::Key << "support_plane" << YAML::Value << YAML::Flow << YAML::BeginMap;
     out << YAML::Key << "normal" << YAML::Value << YAML::Flow << YAML::BeginSeq << n.x() << n.y()
         << n.z() << YAML::EndSeq;
-    out << YAML::Key << "height" << YAML::Value << r.support_plane.height << YAML::EndMap;
+    out << YAML::Key << "height" << YAML::Value << r.support_plane.height;
+    // What a resumed estimator fuses on from (issue 52): the extent and the evidence.
+    const SupportPlane& p = r.support_plane;
+    out << YAML::Key << "centre" << YAML::Value << YAML::Flow << YAML::BeginSeq << p.centre.x()
+        << p.centre.y() << p.centre.z() << YAML::EndSeq;
+    out << YAML::Key << "axis_x" << YAML::Value << YAML::Flow << YAML::BeginSeq << p.axes(0, 0)
+        << p.axes(1, 0) << p.axes(2, 0) << YAML::EndSeq;
+    out << YAML::Key << "size" << YAML::Value << YAML::Flow << YAML::BeginSeq << p.size.x()
+        << p.size.y() << YAML::EndSeq;
+    out << YAML::Key << "inliers" << YAML::Value << p.inliers;
+    out << YAML::Key << "observations" << YAML::Value << p.observations << YAML::EndMap;
   }
   out << YAML::EndMap;
   out << YAML::Key << "trajectory" << YAML::Value << YAML::BeginSeq;
@@ -392,9 +431,43 @@ std::vector<ObjectEstimate> readObjects(const YAML::Node& list, const ModelSet& 
     e.best_consistency = o["consistency"].as<double>();
     e.measurements = o["measurements"].as<int>();
     e.T_map_obj = yaml_io::parsePose(o["map_object"], "map_object");
+    if (o["stage_one_prior"]) {  // since issue 52: a saved map's history
+      try {
+        e.history = readHistory(o["stage_one_prior"]);
+      } catch (const std::exception& ex) {
+        throw std::runtime_error("object " + std::to_string(e.id) + ": " + ex.what());
+      }
+    }
     objects.push_back(e);
   }
   return objects;
+}
+
+Eigen::Vector3d readVector3(const YAML::Node& n) {
+  return {n[0].as<double>(), n[1].as<double>(), n[2].as<double>()};
+}
+
+// The plane; its extent and evidence since issue 52 (without them a resumed estimator finds
+// the plane again from its first keyframe).
+SupportPlane readSupportPlane(const YAML::Node& sp) {
+  SupportPlane p;
+  p.valid = true;
+  p.normal = readVector3(sp["normal"]);
+  p.height = sp["height"].as<double>();
+  if (sp["centre"] && sp["axis_x"] && sp["size"]) {
+    p.centre = readVector3(sp["centre"]);
+    p.size = Eigen::Vector2d(sp["size"][0].as<double>(), sp["size"][1].as<double>());
+    const Eigen::Vector3d n = p.normal.normalized(), x = readVector3(sp["axis_x"]).normalized();
+    p.axes.col(0) = x;
+    p.axes.col(1) = n.cross(x);
+    p.axes.col(2) = n;
+    p.inliers = sp["inliers"].as<int>(0);
+    p.observations = sp["observations"].as<int>(0);
+  }
+  if (!p.normal.allFinite() || !std::isfinite(p.height) || !p.centre.allFinite() ||
+      !p.axes.allFinite() || !(p.normal.norm() > 0.5))
+    throw std::runtime_error("final_map support_plane: not finite or no normal");
+  return p;
 }
 
 StageTimings readTimings(const YAML::Node& t) {
@@ -483,12 +556,7 @@ bool readRunResults(const std::string& path, const ModelSet& models, RunResults*
       fc.distance_residual = c["distance_residual"].as<double>();
       r.final_map.contacts.push_back(fc);
     }
-    if (const YAML::Node sp = fm["support_plane"]) {
-      r.support_plane.valid = true;
-      r.support_plane.normal = Eigen::Vector3d(
-          sp["normal"][0].as<double>(), sp["normal"][1].as<double>(), sp["normal"][2].as<double>());
-      r.support_plane.height = sp["height"].as<double>();
-    }
+    if (const YAML::Node sp = fm["support_plane"]) r.support_plane = readSupportPlane(sp);
     for (const YAML::Node& t : root["trajectory"]) {
       r.trajectory_stamps.push_back(t["stamp"].as<double>());
       r.trajectory.push_back(yaml_io::parsePose(t["map_camera"], "trajectory map_camera"));

@@ -138,8 +138,14 @@ void SceneEstimator::setConfig(const EstimatorConfig& config) {
 }
 
 bool SceneEstimator::resume(const std::vector<ObjectEstimate>& objects,
-                            const Eigen::Isometry3d& T_map_odom, int next_object_id) {
+                            const Eigen::Isometry3d& T_map_odom, int next_object_id,
+                            const SupportPlane* support) {
   if (!T_map_cam_.empty()) return false;
+  if (support && support->valid && support->inliers > 0 && support->size.minCoeff() > 0.0) {
+    support_ = *support;
+    support_model_ =
+        supportPlaneModel(support_, &T_map_support_, config_.support_plane.thickness_m);
+  }
   tracks_.clear();
   next_id_ = std::max(next_id_, next_object_id);
   for (const ObjectEstimate& o : objects) {
@@ -150,6 +156,8 @@ bool SceneEstimator::resume(const std::vector<ObjectEstimate>& objects,
     tr.best_consistency = o.best_consistency;
     tr.prior_measurements = std::max(0, o.measurements);
     tr.prior_evidence = tr.prior_measurements * std::max(0.0, o.best_consistency);
+    tr.prior = o.history;
+    tr.folded = o.history;
     next_id_ = std::max(next_id_, o.id + 1);
   }
   T_map_odom_start_ = T_map_odom;
@@ -662,6 +670,30 @@ void SceneEstimator::settleSymmetryAxis(Track* tr) {
   tr->appearance_model = appearance_models_.of(tr->model);
 }
 
+StageOneMeasurement SceneEstimator::stageOneMeasurement(const Track& track, const Observation& o,
+                                                        int object) const {
+  return {o.keyframe, object, o.T_cam_obj, o.gated ? 0.0 : 1.0 / track.variance,
+          o.refined ? config_.refinement.ray_sigma_m : 0.0};
+}
+
+FoldedMeasurements SceneEstimator::historyOf(const Track& track) const {
+  FoldedMeasurements history = track.folded;
+  for (const Observation& o : track.observations) {
+    if (o.folded || o.keyframe < 0 || o.keyframe >= static_cast<int>(T_map_cam_.size())) continue;
+    history.add(T_map_cam_[static_cast<std::size_t>(o.keyframe)], stageOneMeasurement(track, o, 0),
+                track.symmetryModel(), track.T_stage_one.linear(), config_.stage_one);
+  }
+  return history;
+}
+
+KeyframeResult SceneEstimator::withHistory(KeyframeResult r) const {
+  for (ObjectEstimate& e : r.objects) {
+    for (const Track& tr : tracks_)
+      if (tr.id == e.id) e.history = historyOf(tr);
+  }
+  return r;
+}
+
 StageReport SceneEstimator::runStageOne() {
   StageOneConfig config = config_.stage_one;
   config.odometry_sigma_position_m *= std::sqrt(odometry_variance_);
@@ -682,9 +714,7 @@ StageReport SceneEstimator::runStageOne() {
     for (std::size_t k = 0; k < tr.observations.size(); ++k) {
       Observation& o = tr.observations[k];
       if (o.folded) continue;
-      const StageOneMeasurement m{o.keyframe, static_cast<int>(i), o.T_cam_obj,
-                                  o.gated ? 0.0 : 1.0 / tr.variance,
-                                  o.refined ? config_.refinement.ray_sigma_m : 0.0};
+      const StageOneMeasurement m = stageOneMeasurement(tr, o, static_cast<int>(i));
       if (o.keyframe < first) {
         tr.folded.add(T_map_cam_[static_cast<std::size_t>(o.keyframe)], m, tr.symmetryModel(),
                       tr.T_stage_one.linear(), config);
@@ -972,7 +1002,8 @@ void SceneEstimator::keepSeparations(const std::vector<Separation>& separations,
 }
 
 KeyframeResult SceneEstimator::snapshot() const {
-  return result(static_cast<int>(T_map_cam_.size()) - 1, stamps_.empty() ? 0.0 : stamps_.back());
+  return withHistory(
+      result(static_cast<int>(T_map_cam_.size()) - 1, stamps_.empty() ? 0.0 : stamps_.back()));
 }
 
 KeyframeResult SceneEstimator::finish() {
@@ -985,8 +1016,8 @@ KeyframeResult SceneEstimator::finish() {
     timings.stage_one_ms = msSince(t0);
   }
   if (stages_.relations_and_stage_two) stage_two = runRelationsAndStageTwo(nullptr, &timings);
-  KeyframeResult out =
-      result(static_cast<int>(T_map_cam_.size()) - 1, stamps_.empty() ? 0.0 : stamps_.back());
+  KeyframeResult out = withHistory(
+      result(static_cast<int>(T_map_cam_.size()) - 1, stamps_.empty() ? 0.0 : stamps_.back()));
   out.stage_one = stage_one;
   out.stage_two = stage_two;
   timings.total_ms = msSince(start);

@@ -81,7 +81,7 @@ bool EstimatorPipeline::loadMap(const std::string& path, const ModelSet& models,
         [&](BackgroundMap& map) { read = map.readBinary(files.background, error); });
   }
   if (!read) return false;
-  estimator_->resume(map.final_map.objects, map.T_map_odom, map.next_object_id);
+  estimator_->resume(map.final_map.objects, map.T_map_odom, map.next_object_id, &map.support_plane);
   resumed_ = map;
   if (loaded) *loaded = std::move(map);
   return true;

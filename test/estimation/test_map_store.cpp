@@ -117,6 +117,71 @@ TEST_F(MapStoreTest, SavesAndLoadsObjectsBackgroundAndMapToOdom) {
   EXPECT_EQ(loadedObjects(), 5);
 }
 
+// Issue 52: what a resume continues from comes back as it was saved: each object's stage I
+// history (folded measurements) and the support plane with its extent and evidence; a history
+// whose information is not positive definite is refused, naming the object.
+TEST_F(MapStoreTest, ObjectHistoriesAndTheSupportPlaneComeBack) {
+  RunResults saved = mapOf(2);
+  StageOneConfig config;
+  for (std::size_t i = 0; i < saved.final_map.objects.size(); ++i) {
+    ObjectEstimate& o = saved.final_map.objects[i];
+    for (int k = 0; k < 3 + static_cast<int>(i); ++k) {
+      Eigen::Isometry3d T_map_cam = Eigen::Isometry3d::Identity();
+      T_map_cam.linear() = Eigen::AngleAxisd(0.4 * k, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      T_map_cam.translation() = Eigen::Vector3d(0.3 * k, -0.5, 1.2);
+      StageOneMeasurement m;
+      m.T_cam_obj = T_map_cam.inverse() * o.T_map_obj;
+      m.T_cam_obj.translation().x() += 0.002 * k;  // measurements that disagree a little
+      m.ray_sigma_m = k % 2 ? 0.002 : 0.0;
+      o.history.add(T_map_cam, m, o.model.get(), o.T_map_obj.linear(), config);
+    }
+  }
+  saved.support_plane.valid = true;
+  saved.support_plane.normal = Eigen::Vector3d(0.01, 0.0, 1.0).normalized();
+  saved.support_plane.height = 0.75;
+  saved.support_plane.centre = Eigen::Vector3d(0.1, 0.2, 0.75);
+  saved.support_plane.axes.col(0) = Eigen::Vector3d::UnitY().cross(saved.support_plane.normal);
+  saved.support_plane.axes.col(1) =
+      saved.support_plane.normal.cross(saved.support_plane.axes.col(0));
+  saved.support_plane.axes.col(2) = saved.support_plane.normal;
+  saved.support_plane.size = Eigen::Vector2d(1.2, 0.8);
+  saved.support_plane.inliers = 31415;
+  saved.support_plane.observations = 40;
+  MapFiles f;
+  std::string error;
+  ASSERT_TRUE(saveMap(prefix, saved, backgroundOf(2), &f, &error)) << error;
+  RunResults r;
+  ASSERT_TRUE(loadMap(prefix, models, &r, &f, &error)) << error;
+  for (std::size_t i = 0; i < saved.final_map.objects.size(); ++i) {
+    const FoldedMeasurements &a = saved.final_map.objects[i].history,
+                             &b = r.final_map.objects[i].history;
+    ASSERT_FALSE(b.empty()) << "object " << i;
+    EXPECT_EQ(b.count(), a.count());
+    EXPECT_TRUE(b.mean().isApprox(a.mean(), 1e-8)) << b.mean().matrix();
+    EXPECT_TRUE(b.translationInformation().isApprox(a.translationInformation(), 1e-8));
+    EXPECT_NEAR(b.rotationInformation(), a.rotationInformation(), 1e-6 * a.rotationInformation());
+  }
+  const SupportPlane &a = saved.support_plane, &b = r.support_plane;
+  EXPECT_TRUE(b.valid);
+  EXPECT_TRUE(b.normal.isApprox(a.normal, 1e-9));
+  EXPECT_NEAR(b.height, a.height, 1e-9);
+  EXPECT_TRUE(b.centre.isApprox(a.centre, 1e-9));
+  EXPECT_TRUE(b.axes.isApprox(a.axes, 1e-8)) << b.axes;
+  EXPECT_TRUE(b.size.isApprox(a.size, 1e-9));
+  EXPECT_EQ(b.inliers, a.inliers);
+  EXPECT_EQ(b.observations, a.observations);
+
+  // A history with a translation information that is not positive definite: refused.
+  std::ifstream in(prefix + ".yaml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t at = text.find("translation_information: [");
+  ASSERT_NE(at, std::string::npos) << text;
+  text.insert(at + std::string("translation_information: [").size(), "-");
+  std::ofstream(prefix + ".yaml") << text;
+  EXPECT_FALSE(loadMap(prefix, models, &r, &f, &error));
+  EXPECT_NE(error.find("object 100: stage_one_prior"), std::string::npos) << error;
+}
+
 TEST_F(MapStoreTest, PiecesThatDoNotBelongTogetherAreRefused) {
   MapFiles f;
   std::string error;

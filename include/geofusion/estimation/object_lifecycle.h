@@ -85,8 +85,12 @@ struct ObjectTrack {
   Eigen::Isometry3d T_stage_one = Eigen::Isometry3d::Identity();  ///< stage I / initial
   Eigen::Isometry3d T_refined = Eigen::Isometry3d::Identity();    ///< stage II
   std::vector<TrackObservation> observations;
-  /// Marginalising outside stage I's window: the observations whose cameras left it.
+  /// Marginalising outside stage I's window: the observations whose cameras left it (and the
+  /// prior below).
   FoldedMeasurements folded;
+  /// Stage I's measurements before a resume (saved with the map as they were folded at their
+  /// cameras' poses): a resumed object's history, part of `folded` from the start.
+  FoldedMeasurements prior;
   double best_consistency = 0.0;
   int first_keyframe = -1, last_keyframe = -1;
   bool confirmed = false;        ///< false-positive score at most eps_fp: part of the map

@@ -109,9 +109,22 @@ class FoldedMeasurements {
   void add(const Eigen::Isometry3d& T_map_cam, const StageOneMeasurement& m,
            const ObjectModel* model, const Eigen::Matrix3d& R_reference,
            const StageOneConfig& config);
+  /// Folds another object's (or a saved map's) folded measurements in: the translation terms sum
+  /// exactly, the other's mean rotation joins with its weight, brought to the symmetric
+  /// equivalent of `model` nearest this one's mean (merging two mapped objects).
+  void add(const FoldedMeasurements& other, const ObjectModel* model);
+  /// Folded measurements given by what they amount to (a saved map's, map_store.h): the mean
+  /// pose, the translation's information (map frame, 3 x 3, symmetric positive definite), the
+  /// rotation's information (sum of w / sigma_r^2) and the number of measurements. Empty when
+  /// the information is not positive or not finite.
+  static FoldedMeasurements fromPrior(const Eigen::Isometry3d& mean,
+                                      const Eigen::Matrix3d& translation_information,
+                                      double rotation_information, int count);
   void clear() { *this = FoldedMeasurements(); }
   bool empty() const { return !(rotation_information_ > 0.0); }
   int count() const { return count_; }  ///< measurements folded (weight 0 included)
+  const Eigen::Matrix3d& translationInformation() const { return translation_information_; }
+  double rotationInformation() const { return rotation_information_; }
   /// The prior: mean pose, square-root information of the translation (map frame) and the
   /// rotation's weight (the factors' w_q).
   Eigen::Isometry3d mean() const;

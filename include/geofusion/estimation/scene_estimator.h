@@ -108,6 +108,10 @@ struct ObjectEstimate {
   /// Rotation about a continuous symmetry axis is free and left at 0; zero below two
   /// measurements.
   Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  /// Stage I's measurements of it folded at their cameras' present poses (issue 52): what a
+  /// saved map keeps of its history, the prior a resume continues from. Filled by snapshot()
+  /// and finish() only (empty in the keyframes' results).
+  FoldedMeasurements history;
 };
 
 struct StageTimings {
@@ -201,17 +205,20 @@ class SceneEstimator {
   KeyframeResult addKeyframe(const Keyframe& keyframe);
   /// Continues a saved map (map_store.h) before the first keyframe: its objects become
   /// confirmed objects at their saved poses with their measurement counts and consistency (new
-  /// detections associate with them; the free-space test removes those gone), and the first
+  /// detections associate with them; the free-space test removes those gone), their saved
+  /// history (ObjectEstimate::history) stage I's prior on them as if the cameras that made it
+  /// had left its window (without one only the new measurements place them), and the first
   /// keyframe's camera is placed through the saved map -> odom (the robot's odometry must
-  /// continue in the same odom frame). The support plane is found again from the first keyframe
-  /// (a saved one has its normal and height only). False, changing nothing, once a keyframe was
-  /// added.
+  /// continue in the same odom frame). False, changing nothing, once a keyframe was added.
   /// `next_object_id`: the saved map's next id (ids are never given out twice).
+  /// `support`: the saved support plane; with its extent and inliers (saved since issue 52) the
+  /// new keyframes' estimates are fused on from it, else it is found again from the first.
   bool resume(const std::vector<ObjectEstimate>& objects, const Eigen::Isometry3d& T_map_odom,
-              int next_object_id = 0);
+              int next_object_id = 0, const SupportPlane* support = nullptr);
   /// Final stage I and stage II over everything (the map a run ends with).
   KeyframeResult finish();
-  /// The map as the last keyframe left it, without the final solve (what an autosave keeps).
+  /// The map as the last keyframe left it, without the final solve (what an autosave keeps),
+  /// with each object's history.
   KeyframeResult snapshot() const;
   /// The id the next new object will get.
   int nextObjectId() const { return next_id_; }
@@ -279,7 +286,14 @@ class SceneEstimator {
   bool stageOneDue(int t) const;
   /// Before stage I: the angle about a can's axis from its detections where they agree.
   void settleSymmetryAxis(Track* track);
+  /// Stage I's measurement of `track` (object index `object`) made by its observation `o`.
+  StageOneMeasurement stageOneMeasurement(const Track& track, const Observation& o,
+                                          int object) const;
   StageReport runStageOne();
+  /// The track's stage I measurements folded at the cameras' present poses (its history).
+  FoldedMeasurements historyOf(const Track& track) const;
+  /// `r` (the map after the last keyframe) with each object's history.
+  KeyframeResult withHistory(KeyframeResult r) const;
   void adaptNoise(const std::vector<std::size_t>& reported,
                   const std::vector<Eigen::Isometry3d>& objects,
                   const std::vector<const ObjectModel*>& models,
