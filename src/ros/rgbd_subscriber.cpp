@@ -37,7 +37,8 @@ RgbdSubscriber::RgbdSubscriber(ros::NodeHandle nh, const Config& config, FrameCa
       config_(config),
       on_frame_(std::move(on_frame)),
       on_time_jump_(std::move(on_time_jump)),
-      it_(nh) {
+      it_(nh),
+      jump_gate_(withDetections() ? 4 : 3, config_.time_jump_tolerance_s) {
   const image_transport::TransportHints hints("raw", ros::TransportHints(), nh_);
   rgb_sub_ = it_.subscribe(config_.rgb_topic, config_.queue_size,
                            &RgbdSubscriber::onInput<0, sensor_msgs::Image>, this, hints);
@@ -68,7 +69,7 @@ RgbdSubscriber::~RgbdSubscriber() {
 
 template <int I, class M>
 void RgbdSubscriber::onInput(const boost::shared_ptr<M const>& msg) {
-  noteInput(I, msg->header.stamp);
+  if (!noteInput(I, msg->header.stamp)) return;
   std::lock_guard<std::mutex> lock(sync_mutex_);
   if (detection_sync_) {
     detection_sync_->template add<I>(msg);
@@ -127,36 +128,35 @@ std::size_t RgbdSubscriber::synchronizedCount() const {
   return monitor_->synchronizedCount();
 }
 
-void RgbdSubscriber::noteInput(std::size_t index, const ros::Time& stamp) {
-  bool jumped = false;
-  ros::Time from;
+bool RgbdSubscriber::noteInput(std::size_t index, const ros::Time& stamp) {
+  TimeJumpGate::Decision d;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (index == 0) {
-      if (!last_rgb_stamp_.isZero() &&
-          stamp + ros::Duration(config_.time_jump_tolerance_s) < last_rgb_stamp_) {
-        jumped = true;
-        from = last_rgb_stamp_;
-        monitor_->reset(wallNow());
-        newest_stamp_s_ = 0.0;
-      }
-      last_rgb_stamp_ = stamp;
+    d = jump_gate_.onMessage(index, stamp.toSec(), wallNow());
+    if (d.jumped) {
+      monitor_->reset(wallNow());
+      newest_stamp_s_ = 0.0;
     }
-    newest_stamp_s_ = std::max(newest_stamp_s_, stamp.toSec());
+    if (d.keep) newest_stamp_s_ = std::max(newest_stamp_s_, stamp.toSec());
     monitor_->onMessage(index, wallNow());
   }
-  if (jumped) {
+  if (!d.keep) {
+    ROS_DEBUG("geofusion: a message on %s from before the time jump dropped",
+              topics()[index].c_str());
+  }
+  if (d.jumped) {
     ROS_WARN(
         "geofusion: time jumped back from %.3f to %.3f on %s (a looping bag or a restarted "
         "driver?); restarting synchronisation",
-        from.toSec(), stamp.toSec(), topics()[0].c_str());
+        d.from_s, stamp.toSec(), topics()[index].c_str());
     // The old synchroniser holds messages from the future: start a fresh one.
     {
       std::lock_guard<std::mutex> lock(sync_mutex_);
       makeSynchronizer();
     }
-    if (on_time_jump_) on_time_jump_(from, stamp);
+    if (on_time_jump_) on_time_jump_(ros::Time(d.from_s), stamp);
   }
+  return d.keep;
 }
 
 void RgbdSubscriber::onSynchronized(const sensor_msgs::ImageConstPtr& rgb,

@@ -783,8 +783,12 @@ void SceneEstimatorNode::onTimeJump(const ros::Time& from, const ros::Time& to) 
   std::lock_guard<std::mutex> lock(mutex_);
   overflowed_ = 0;
   pipeline_->reset();
-  tf_buffer_.clear();
-  odom_buffer_.clear();
+  // Where the clock went back too (simulated time, a looping bag), tf2's listener clears its
+  // buffer at its first message after the jump; clearing it here again would drop the new
+  // loop's first transforms, received before this frame (its first keyframe lost for "no camera
+  // pose"). Stamps that go back while the clock does not would be refused as old data: cleared.
+  // The odometry's own buffer is cleared by its callback when its stamps go back.
+  if (ros::Time::now() >= to + ros::Duration(0.5 * (from - to).toSec())) tf_buffer_.clear();
   last_ = KeyframeResult();
 }
 

@@ -38,12 +38,15 @@ SLOW = 1.0 / RATE
 AUTOSAVE_EVERY = 4  # test/ros/config/autosave.yaml
 AUTOSAVE_DIR = '/tmp/geofusion_autosave_test'  # ... its autosave_prefix's folder
 AUTOSAVE = AUTOSAVE_DIR + '/autosave'
-# Issue 52's target: every object within 2 mm ADD-S of the uninterrupted run. Missed (docs/tests.md):
-# median 1.9 mm, but one can 11 mm and a mug 6 mm off in a run; the resumed objects lose the
-# frames missed while the manager restarts (its loader's bond times out after 4 s) and stage I's
-# history. The test holds the median with room for a loaded machine and prints every object's.
+# Issue 52's target: every object within 2 mm ADD-S of the uninterrupted run. The resumed objects
+# keep their stage I history and the support plane (saved with the map), and every replay of the
+# recording maps the same (the first frame after the loop is no longer lost), so the objects end
+# within 0.2-0.6 mm of the uninterrupted run (docs/tests.md), except where the frames missed
+# while the manager restarts (the loader's bond times out after 4 s; about 4.5 s of the
+# recording unseen) carried an object's measurements: the gelatin box 3.2 mm, the target MISSED
+# for it. The test holds the median under 1 mm and prints every object's.
 ADDS_TARGET_M = 0.002
-ADDS_MEDIAN_MAX_M = 0.004
+ADDS_MEDIAN_MAX_M = 0.001
 
 
 def box_points(size, n=5):
@@ -168,6 +171,20 @@ class CrashTest(unittest.TestCase):
         time.sleep(1.0)
         reference = final_objects(self.save('reference'))
         self.assertGreaterEqual(len(reference), 8, 'the uninterrupted run mapped too little')
+        # The recording again (time jumps back: a looping bag) maps the same, its first frame
+        # included: what the resumed run is compared with does not depend on the replay.
+        before = self.map_count()
+        util.play(self.bag, rate=RATE)
+        self.assertTrue(util.wait_until(lambda: self.map_count() - before >= KEYFRAMES - 2,
+                                        30 * SLOW))
+        time.sleep(1.0)
+        again = final_objects(self.save('again'))
+        self.assertEqual(len(again), len(reference))
+        shifts = sorted(min(math.dist(p[:3], q[:3]) for n, q in again.values() if n == name)
+                        for name, p in reference.values())
+        print('loop: %d maps in the second replay; objects moved by at most %.3f mm' %
+              (self.map_count() - before, 1000 * shifts[-1]))
+        self.assertLess(shifts[-1], 0.0005, 'the second replay mapped differently')
 
         before = self.map_count()
         pid = manager_pid()

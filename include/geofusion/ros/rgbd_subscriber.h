@@ -7,6 +7,7 @@
 
 #include "geofusion/common/input_monitor.h"
 #include "geofusion/common/robot_names.h"
+#include "geofusion/common/time_jump.h"
 #include "geofusion/config/config.h"
 
 #include <geofusion/DetectionArray.h>
@@ -84,8 +85,9 @@ class RgbdSubscriber {
   using RgbdSync = message_filters::Synchronizer<RgbdPolicy>;
 
   void makeSynchronizer();
-  /// Watchdog bookkeeping and time-jump detection (restarts the synchroniser on a jump back).
-  void noteInput(std::size_t index, const ros::Time& stamp);
+  /// Counts the message and passes it through the time-jump gate: false when it is to be
+  /// dropped (from before a jump); a jump restarts the synchroniser and calls on_time_jump_.
+  bool noteInput(std::size_t index, const ros::Time& stamp);
   template <int I, class M>
   void onInput(const boost::shared_ptr<M const>& msg);
   void onSynchronized(const sensor_msgs::ImageConstPtr& rgb,
@@ -113,7 +115,7 @@ class RgbdSubscriber {
   ros::WallTimer watchdog_;
   mutable std::mutex mutex_;
   std::unique_ptr<InputMonitor> monitor_;
-  ros::Time last_rgb_stamp_;
+  TimeJumpGate jump_gate_;  ///< under mutex_
   double newest_stamp_s_ = 0.0;
 };
 
