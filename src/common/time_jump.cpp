@@ -12,7 +12,7 @@ TimeJumpGate::TimeJumpGate(std::size_t inputs, double tolerance_s, double join_t
 
 TimeJumpGate::Decision TimeJumpGate::onMessage(std::size_t index, double stamp_s, double wall_s) {
   Decision d;
-  if (index >= last_stamp_.size()) return d;
+  if (index >= last_stamp_.size() || !(stamp_s > 0.0)) return d;  // no stamp: no time to judge
   const bool back = last_stamp_[index] > 0.0 && stamp_s + tolerance_s_ < last_stamp_[index];
   if (!joined_[index]) {
     // Waiting for this input's first message after the jump: the new epoch's messages are
@@ -24,6 +24,15 @@ TimeJumpGate::Decision TimeJumpGate::onMessage(std::size_t index, double stamp_s
     } else {
       d.keep = false;
     }
+    return d;
+  }
+  // Back against this input's own last stamp but not against the others' (its own late
+  // message from before the jump, let through by the timeout): no new epoch.
+  double others = 0.0;
+  for (std::size_t j = 0; j < last_stamp_.size(); ++j)
+    if (j != index && joined_[j]) others = std::max(others, last_stamp_[j]);
+  if (back && !(stamp_s + tolerance_s_ < others)) {
+    last_stamp_[index] = stamp_s;
     return d;
   }
   if (back) {

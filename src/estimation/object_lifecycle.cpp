@@ -182,7 +182,7 @@ void absorb(ObjectTrack* dropped_track, ObjectTrack* kept) {
   std::sort(
       kept->observations.begin(), kept->observations.end(),
       [](const TrackObservation& x, const TrackObservation& y) { return x.keyframe < y.keyframe; });
-  kept->prior.add(dropped.prior, kept->symmetryModel());
+  kept->prior.add(dropped.prior, kept->symmetryModel(), kept->T_stage_one.linear());
   kept->folded = kept->prior;  // folded again from the merged observations
   for (TrackObservation& o : kept->observations) o.folded = false;
   kept->best_consistency = std::max(kept->best_consistency, dropped.best_consistency);

@@ -176,14 +176,15 @@ void FoldedMeasurements::add(const Eigen::Isometry3d& T_map_cam, const StageOneM
   rotation_information_ += w_rotation;
 }
 
-void FoldedMeasurements::add(const FoldedMeasurements& other, const ObjectModel* model) {
+void FoldedMeasurements::add(const FoldedMeasurements& other, const ObjectModel* model,
+                             const Eigen::Matrix3d& R_reference) {
   if (other.empty()) {
     count_ += other.count_;
     return;
   }
   const Eigen::Matrix3d R_other = other.mean().linear();
   const Eigen::Matrix3d R =
-      empty() || !model ? R_other : alignToReference(model->symmetry, mean().linear(), R_other);
+      model ? alignToReference(model->symmetry, R_reference, R_other) : R_other;
   translation_information_ += other.translation_information_;
   information_vector_ += other.information_vector_;
   rotation_sum_ += other.rotation_information_ * R;

@@ -156,8 +156,9 @@ bool SceneEstimator::resume(const std::vector<ObjectEstimate>& objects,
     tr.best_consistency = o.best_consistency;
     tr.prior_measurements = std::max(0, o.measurements);
     tr.prior_evidence = tr.prior_measurements * std::max(0.0, o.best_consistency);
-    tr.prior = o.history;
-    tr.folded = o.history;
+    // The history's rotations as the symmetric equivalent nearest the saved pose.
+    tr.prior.add(o.history, tr.symmetryModel(), o.T_map_obj.linear());
+    tr.folded = tr.prior;
     next_id_ = std::max(next_id_, o.id + 1);
   }
   T_map_odom_start_ = T_map_odom;

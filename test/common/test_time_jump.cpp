@@ -52,8 +52,28 @@ TEST(TimeJumpGate, SmallStampDisorderIsNoJumpAndASilentInputIsLetThroughAgain) {
   EXPECT_TRUE(gate.onMessage(1, 50.4, 3.5).keep);
   EXPECT_TRUE(gate.onMessage(1, 50.6, 3.6).keep);
   EXPECT_EQ(gate.jumps(), 1);
-  // An input index the gate does not know is passed on.
+  // An input index the gate does not know, and a message without a stamp, are passed on.
   EXPECT_TRUE(gate.onMessage(7, 1.0, 4.0).keep);
+  const TimeJumpGate::Decision unstamped = gate.onMessage(1, 0.0, 4.0);
+  EXPECT_TRUE(unstamped.keep);
+  EXPECT_FALSE(unstamped.jumped);
+  EXPECT_EQ(gate.jumps(), 1);
+}
+
+// A slow input whose last message from before the jump comes after the join timeout: let
+// through, and its next message (the new loop's) starts no second epoch.
+TEST(TimeJumpGate, ALateMessageFromBeforeTheJumpStartsNoSecondJump) {
+  TimeJumpGate gate(3, 1.0, 2.0);
+  for (std::size_t i = 0; i < 3; ++i) gate.onMessage(i, 30.0, 0.0);
+  EXPECT_TRUE(gate.onMessage(0, 10.0, 1.0).jumped);
+  EXPECT_TRUE(gate.onMessage(1, 10.0, 1.0).keep);
+  EXPECT_TRUE(gate.onMessage(2, 30.2, 3.5).keep);  // late, after the timeout
+  const TimeJumpGate::Decision next = gate.onMessage(2, 10.2, 3.6);
+  EXPECT_TRUE(next.keep);
+  EXPECT_FALSE(next.jumped);
+  EXPECT_TRUE(gate.onMessage(0, 10.2, 3.6).keep);
+  EXPECT_FALSE(gate.onMessage(2, 10.4, 3.8).jumped);
+  EXPECT_EQ(gate.jumps(), 1);
 }
 
 }  // namespace

@@ -5,7 +5,9 @@
 // message stamped back. Until it has, an input's messages are from before the jump (the old loop's
 // last messages still in flight) and are dropped, so that they neither reach the new synchroniser
 // nor start a second jump that would lose the new epoch's first set. An input that has not jumped
-// back within `join_timeout_s` (wall time) is let through again. ROS-free (tested in
+// back within `join_timeout_s` (wall time) is let through again; a message that goes back
+// against its own input only (that input's late message from before the jump) starts no new
+// epoch. Messages without a stamp (0) are passed on unjudged. ROS-free (tested in
 // test/common/test_time_jump.cpp).
 
 #include <cstddef>

@@ -111,8 +111,9 @@ class FoldedMeasurements {
            const StageOneConfig& config);
   /// Folds another object's (or a saved map's) folded measurements in: the translation terms sum
   /// exactly, the other's mean rotation joins with its weight, brought to the symmetric
-  /// equivalent of `model` nearest this one's mean (merging two mapped objects).
-  void add(const FoldedMeasurements& other, const ObjectModel* model);
+  /// equivalent of `model` nearest `R_reference` (the object's rotation, as for a measurement).
+  void add(const FoldedMeasurements& other, const ObjectModel* model,
+           const Eigen::Matrix3d& R_reference);
   /// Folded measurements given by what they amount to (a saved map's, map_store.h): the mean
   /// pose, the translation's information (map frame, 3 x 3, symmetric positive definite), the
   /// rotation's information (sum of w / sigma_r^2) and the number of measurements. Empty when
