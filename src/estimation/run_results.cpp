@@ -443,21 +443,18 @@ std::vector<ObjectEstimate> readObjects(const YAML::Node& list, const ModelSet& 
   return objects;
 }
 
-Eigen::Vector3d readVector3(const YAML::Node& n) {
-  return {n[0].as<double>(), n[1].as<double>(), n[2].as<double>()};
-}
-
 // The plane; its extent and evidence since issue 52 (without them a resumed estimator finds
 // the plane again from its first keyframe).
 SupportPlane readSupportPlane(const YAML::Node& sp) {
   SupportPlane p;
   p.valid = true;
-  p.normal = readVector3(sp["normal"]);
+  p.normal = yaml_io::parseVector3(sp["normal"]);
   p.height = sp["height"].as<double>();
   if (sp["centre"] && sp["axis_x"] && sp["size"]) {
-    p.centre = readVector3(sp["centre"]);
+    p.centre = yaml_io::parseVector3(sp["centre"]);
     p.size = Eigen::Vector2d(sp["size"][0].as<double>(), sp["size"][1].as<double>());
-    const Eigen::Vector3d n = p.normal.normalized(), x = readVector3(sp["axis_x"]).normalized();
+    const Eigen::Vector3d n = p.normal.normalized(),
+                          x = yaml_io::parseVector3(sp["axis_x"]).normalized();
     p.axes.col(0) = x;
     p.axes.col(1) = n.cross(x);
     p.axes.col(2) = n;

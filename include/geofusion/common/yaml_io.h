@@ -25,6 +25,11 @@ inline void emitPose(YAML::Emitter& out, const char* key, const Eigen::Isometry3
       << q.x() << q.y() << q.z() << q.w() << YAML::EndSeq;
 }
 
+/// The vector of `[x, y, z]` (yaml-cpp throws on a missing or non-numeric entry).
+inline Eigen::Vector3d parseVector3(const YAML::Node& n) {
+  return {n[0].as<double>(), n[1].as<double>(), n[2].as<double>()};
+}
+
 /// The pose of `[x, y, z, qx, qy, qz, qw]`; throws std::runtime_error naming `what` when the node
 /// is not such a list, the quaternion is not unit or a value is not finite.
 inline Eigen::Isometry3d parsePose(const YAML::Node& n, const char* what) {
