@@ -12,7 +12,10 @@ namespace {
 // Launch-file choices that override the file: private parameter -> setting.
 const std::vector<std::pair<std::string, std::string>>& launchOverrides() {
   static const std::vector<std::pair<std::string, std::string>> overrides{
-      {"method", "method"}, {"model_set", "model_set.name"}, {"models_dir", "model_set.dir"}};
+      {"method", "method"},
+      {"model_set", "model_set.name"},
+      {"models_dir", "model_set.dir"},
+      {"autosave_prefix", "node.autosave_prefix"}};
   return overrides;
 }
 

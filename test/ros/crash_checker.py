@@ -36,8 +36,10 @@ RATE = util.throughput_rate(1.0)
 # The waits on the replay's progress grow as the replay is slowed down (under a sanitizer).
 SLOW = 1.0 / RATE
 AUTOSAVE_EVERY = 4  # test/ros/config/autosave.yaml
-AUTOSAVE_DIR = '/tmp/geofusion_autosave_test'  # ... its autosave_prefix's folder
-AUTOSAVE = AUTOSAVE_DIR + '/autosave'
+# The run's own autosave folder (the launch's autosave_prefix:=, a roslaunch $(anon ...) name in
+# /tmp: two runs at once never share it); set from ~autosave_dir at start.
+AUTOSAVE_DIR = None
+AUTOSAVE = None
 # Issue 52's target: every object within 2 mm ADD-S of the uninterrupted run. The resumed objects
 # keep their stage I history and the support plane (saved with the map), and every replay of the
 # recording maps the same (the first frame after the loop is no longer lost), so the objects end
@@ -136,6 +138,10 @@ class CrashTest(unittest.TestCase):
 
     def tearDown(self):
         shutil.rmtree(self.dir, ignore_errors=True)
+
+    @classmethod
+    def tearDownClass(cls):
+        shutil.rmtree(AUTOSAVE_DIR, ignore_errors=True)
 
     def on_map(self, msg):
         with self.lock:
@@ -300,4 +306,6 @@ class CrashTest(unittest.TestCase):
 
 if __name__ == '__main__':
     rospy.init_node('crash_checker')
+    AUTOSAVE_DIR = rospy.get_param('~autosave_dir')
+    AUTOSAVE = AUTOSAVE_DIR + '/autosave'
     rostest.rosrun('geofusion', 'scene_estimator_crash', CrashTest)
