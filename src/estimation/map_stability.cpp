@@ -52,7 +52,10 @@ SupportGraph mapSupportGraph(const std::vector<ObjectEstimate>& objects,
     g.centre = o.T_map_obj.translation();
     if (o.model) {
       g.class_name = o.model->name;
-      g.centre = o.T_map_obj * boxOf(*o.model).center().cast<double>();
+      const Eigen::AlignedBox3f box = boxOf(*o.model);
+      g.centre = o.T_map_obj * box.center().cast<double>();
+      g.box_pose = o.T_map_obj * Eigen::Translation3d(box.center().cast<double>());
+      g.box_size = box.sizes().cast<double>();
     }
     if (stability) {
       const physics::BodyMotion* m = stability->find(o.id);

@@ -97,6 +97,8 @@ void emitSceneGraph(YAML::Emitter& out, const SupportGraph& g) {
     out << YAML::Key << "leans_on" << YAML::Value << YAML::Flow << n.leans_on;
     out << YAML::Key << "leaned_on_by" << YAML::Value << YAML::Flow << n.leaned_on_by;
     out << YAML::Key << "beside" << YAML::Value << YAML::Flow << n.beside;
+    out << YAML::Key << "over" << YAML::Value << YAML::Flow << n.over;
+    out << YAML::Key << "covered_by" << YAML::Value << YAML::Flow << n.covered_by;
     out << YAML::Key << "stable" << YAML::Value << n.stable;
     out << YAML::Key << "free_to_pick" << YAML::Value << n.free_to_pick;
     out << YAML::Key << "removal_step" << YAML::Value << n.removal_step;

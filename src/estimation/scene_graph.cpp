@@ -1,6 +1,14 @@
 #include "geofusion/estimation/scene_graph.h"
 
+// Boost 1.74's rescale policy trips GCC's -Wmaybe-uninitialized (a false positive in the
+// header, fixed in later Boost).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include <boost/geometry.hpp>
+#pragma GCC diagnostic pop
+
 #include <algorithm>
+#include <limits>
 #include <map>
 #include <set>
 
@@ -51,6 +59,72 @@ void addRelation(const std::vector<SupportGraphObject>& objects, const FeatureCo
   if (lower >= 0) addOnce(&node(lower)->supports, idOf(upper));
 }
 
+namespace bg = boost::geometry;
+using Point2 = bg::model::d2::point_xy<double>;
+using Polygon2 = bg::model::polygon<Point2>;
+
+// An object's box seen along gravity: its outline on the plane across gravity (the convex hull of
+// the box's corners, Boost.Geometry), and its bottom, centre and top along up.
+struct Footprint {
+  bool known = false;
+  Polygon2 outline;
+  double area = 0.0, bottom = 0.0, centre = 0.0, top = 0.0;
+};
+
+Footprint footprintOf(const SupportGraphObject& o, const Eigen::Vector3d& up) {
+  Footprint f;
+  if (!(o.box_size.array() > 0.0).all() || !o.box_pose.matrix().allFinite()) return f;
+  const Eigen::Vector3d u = up.unitOrthogonal(), v = up.cross(u);
+  bg::model::multi_point<Point2> corners;
+  f.bottom = std::numeric_limits<double>::infinity();
+  f.top = -f.bottom;
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d corner((k & 1 ? 0.5 : -0.5) * o.box_size.x(),
+                                 (k & 2 ? 0.5 : -0.5) * o.box_size.y(),
+                                 (k & 4 ? 0.5 : -0.5) * o.box_size.z());
+    const Eigen::Vector3d p = o.box_pose * corner;
+    corners.push_back(Point2(p.dot(u), p.dot(v)));
+    f.bottom = std::min(f.bottom, p.dot(up));
+    f.top = std::max(f.top, p.dot(up));
+  }
+  bg::convex_hull(corners, f.outline);
+  f.area = bg::area(f.outline);
+  f.centre = o.box_pose.translation().dot(up);
+  f.known = f.area > 0.0;
+  return f;
+}
+
+// Whether `upper` lies over `lower` (buildSupportGraph's rule).
+bool liesOver(const Footprint& upper, const Footprint& lower) {
+  if (!upper.known || !lower.known) return false;
+  if (upper.centre < lower.centre + kOverAbove || upper.top < lower.top + kOverAbove ||
+      upper.bottom > lower.top + kOverGap)
+    return false;
+  std::vector<Polygon2> shared;
+  bg::intersection(upper.outline, lower.outline, shared);
+  double area = 0.0;
+  for (const Polygon2& p : shared) area += bg::area(p);
+  return area >= kOverShare * std::min(upper.area, lower.area);
+}
+
+// "Over" for the pairs with no support or leaning relation between them.
+void addOverRelations(const std::vector<SupportGraphObject>& objects, const Eigen::Vector3d& up,
+                      std::vector<SupportGraphNode>* nodes) {
+  std::vector<Footprint> feet;
+  for (const SupportGraphObject& o : objects) feet.push_back(footprintOf(o, up));
+  auto related = [&](const SupportGraphNode& n, int id) {
+    for (const std::vector<int>* l : {&n.supported_by, &n.supports, &n.leans_on, &n.leaned_on_by})
+      if (std::find(l->begin(), l->end(), id) != l->end()) return true;
+    return false;
+  };
+  for (std::size_t i = 0; i < objects.size(); ++i)
+    for (std::size_t j = 0; j < objects.size(); ++j) {
+      if (i == j || !liesOver(feet[i], feet[j]) || related((*nodes)[i], objects[j].id)) continue;
+      addOnce(&(*nodes)[i].over, objects[j].id);
+      addOnce(&(*nodes)[j].covered_by, objects[i].id);
+    }
+}
+
 // Whether object i goes before j among those free to take: seen better, then higher, then the
 // lower id.
 bool takenBefore(const SupportGraphObject& i, const SupportGraphObject& j,
@@ -61,8 +135,8 @@ bool takenBefore(const SupportGraphObject& i, const SupportGraphObject& j,
   return i.id < j.id;
 }
 
-// The removal order: repeatedly the best-seen object that nothing left rests or leans on; in a
-// cycle, the highest object left.
+// The removal order: repeatedly the best-seen object that nothing left rests, leans or lies on; in
+// a cycle, the highest object left.
 void orderRemovals(const std::vector<SupportGraphObject>& objects, const Eigen::Vector3d& up,
                    SupportGraph* graph) {
   std::map<int, int> index_of;
@@ -70,7 +144,7 @@ void orderRemovals(const std::vector<SupportGraphObject>& objects, const Eigen::
   std::vector<bool> taken(objects.size(), false);
   auto blocked = [&](std::size_t i) {
     const SupportGraphNode& n = graph->nodes[i];
-    for (const std::vector<int>* on : {&n.supports, &n.leaned_on_by})
+    for (const std::vector<int>* on : {&n.supports, &n.leaned_on_by, &n.covered_by})
       for (int id : *on)
         if (!taken[static_cast<std::size_t>(index_of.at(id))]) return true;
     return false;
@@ -129,8 +203,9 @@ SupportGraph buildSupportGraph(const std::vector<SupportGraphObject>& objects,
     graph.nodes.push_back(node);
   }
   for (const FeatureContact& c : contacts) addRelation(objects, c, up, &graph.nodes);
+  addOverRelations(objects, up, &graph.nodes);
   for (SupportGraphNode& n : graph.nodes)
-    n.free_to_pick = n.supports.empty() && n.leaned_on_by.empty();
+    n.free_to_pick = n.supports.empty() && n.leaned_on_by.empty() && n.covered_by.empty();
   orderRemovals(objects, up, &graph);
   return graph;
 }

@@ -199,7 +199,8 @@ class PyEstimator {
           py::arg("id") = n.id, py::arg("class_name") = n.class_name,
           py::arg("supported_by") = n.supported_by, py::arg("supports") = n.supports,
           py::arg("leans_on") = n.leans_on, py::arg("leaned_on_by") = n.leaned_on_by,
-          py::arg("beside") = n.beside,
+          py::arg("beside") = n.beside, py::arg("over") = n.over,
+          py::arg("covered_by") = n.covered_by,
           py::arg("stable") = n.stable < 0 ? py::object(py::none()) : py::bool_(n.stable == 1),
           py::arg("free_to_pick") = n.free_to_pick, py::arg("removal_step") = n.removal_step));
     return py::dict(py::arg("objects") = nodes, py::arg("removal_order") = g.removal_order,

@@ -73,7 +73,7 @@ PlanCells planCells(const geofusion::SceneGraph& graph, uint32_t id) {
       cells.free = "free";
     } else {
       std::string above;
-      for (const auto* list : {&o.supports, &o.leaned_on_by})
+      for (const auto* list : {&o.supports, &o.leaned_on_by, &o.covered_by})
         for (uint32_t other : *list) above += (above.empty() ? "" : ", ") + std::to_string(other);
       cells.free = "under " + above;
     }

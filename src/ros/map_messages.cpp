@@ -103,6 +103,8 @@ geofusion::SceneGraph toSceneGraphMsg(const SupportGraph& graph, const std_msgs:
     o.leans_on = ids(n.leans_on);
     o.leaned_on_by = ids(n.leaned_on_by);
     o.beside = ids(n.beside);
+    o.over = ids(n.over);
+    o.covered_by = ids(n.covered_by);
     o.stable = static_cast<int8_t>(n.stable);
     o.free_to_pick = n.free_to_pick;
     o.removal_step = n.removal_step;

@@ -87,6 +87,55 @@ TEST(SupportGraph, LevelLeaningUsesHeightsAndACycleIsBrokenAtTheTop) {
   EXPECT_NE(cycle.warnings[0].find("board #1"), std::string::npos) << cycle.warnings[0];
 }
 
+SupportGraphObject boxed(int id, const std::string& name, const Eigen::Vector3d& centre,
+                         const Eigen::Vector3d& size, double visibility,
+                         const Eigen::Matrix3d& R = Eigen::Matrix3d::Identity()) {
+  SupportGraphObject o = object(id, name, centre.z(), visibility);
+  o.centre = centre;
+  o.box_pose.linear() = R;
+  o.box_pose.translation() = centre;
+  o.box_size = size;
+  return o;
+}
+
+TEST(SupportGraph, AnObjectLyingOverAnotherWithoutAContactIsTakenFirst) {
+  // A bowl (id 1, 16 x 16 x 5 cm) on the table, a box (2) tilted 30 degrees resting on its rim
+  // and the table, no contact between them found; a can (3) beside the bowl, as tall as the box
+  // reaches but 1 cm apart; a plate (4) 20 cm above the bowl (another shelf: no relation).
+  const Eigen::Matrix3d tilt = Eigen::AngleAxisd(0.52, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const std::vector<SupportGraphObject> objects = {
+      boxed(1, "bowl", {0, 0, 0.025}, {0.16, 0.16, 0.05}, 0.9),
+      boxed(2, "box", {0.10, 0, 0.07}, {0.09, 0.06, 0.17}, 0.2, tilt),
+      boxed(3, "can", {0, 0.14, 0.06}, {0.1, 0.1, 0.12}, 0.8),
+      boxed(4, "plate", {0, 0, 0.25}, {0.2, 0.2, 0.02}, 0.1)};
+  const std::vector<FeatureContact> contacts = {contact(-1, 0, ContactKind::kSupport),
+                                                contact(-1, 1, ContactKind::kSupport),
+                                                contact(-1, 2, ContactKind::kSupport)};
+  const SupportGraph g = buildSupportGraph(objects, contacts, Eigen::Vector3d(0, 0, -9.81));
+  EXPECT_EQ(g.find(2)->over, std::vector<int>{1});
+  EXPECT_EQ(g.find(1)->covered_by, std::vector<int>{2});
+  EXPECT_FALSE(g.find(1)->free_to_pick);
+  for (int id : {2, 3, 4}) {
+    EXPECT_TRUE(g.find(id)->covered_by.empty()) << id;
+    EXPECT_TRUE(g.find(id)->free_to_pick) << id;
+  }
+  EXPECT_TRUE(g.find(3)->over.empty());
+  EXPECT_TRUE(g.find(4)->over.empty());
+  // Seen best, the bowl would go first; the box over it goes before it.
+  EXPECT_EQ(g.removal_order, (std::vector<int>{3, 2, 1, 4}));
+  // With the contact found, the relation is the contact's, not "over".
+  std::vector<FeatureContact> leaning = contacts;
+  leaning.push_back(contact(0, 1, ContactKind::kLeaning, Eigen::Vector3d(1, 0, 1).normalized()));
+  const SupportGraph l = buildSupportGraph(objects, leaning, Eigen::Vector3d(0, 0, -9.81));
+  EXPECT_TRUE(l.find(2)->over.empty());
+  EXPECT_EQ(l.find(2)->leans_on, std::vector<int>{1});
+  // Without boxes (the ground truth's graph: contacts only) nothing is "over".
+  const SupportGraph bare =
+      buildSupportGraph({object(1, "bowl", 0.025, 0.9), object(2, "box", 0.07, 0.2)}, contacts,
+                        Eigen::Vector3d(0, 0, -1));
+  EXPECT_TRUE(bare.find(1)->free_to_pick);
+}
+
 // The scene's objects still there (not in `taken`) under gravity: each one's motion by id.
 std::map<int, double> motionsWithout(const ClutterScene& scene, const std::vector<int>& taken) {
   std::vector<physics::StabilityBody> bodies;

@@ -141,15 +141,16 @@ def test_the_demo_through_the_module_is_run_offlines_map(demo):
     verdict = {o['id']: o['stable'] for o in stability['objects']}
     for o in graph['objects']:
         w = by_id[o['id']]
-        for key in ('supported_by', 'supports', 'leans_on', 'leaned_on_by', 'beside',
-                    'free_to_pick', 'removal_step'):
+        for key in ('supported_by', 'supports', 'leans_on', 'leaned_on_by', 'beside', 'over',
+                    'covered_by', 'free_to_pick', 'removal_step'):
             assert o[key] == w[key], (o['id'], key)
         assert o['stable'] == verdict[o['id']] == bool(w['stable'])
-        assert o['free_to_pick'] == (not o['supports'] and not o['leaned_on_by'])
-    # The plan takes nothing before what rests or leans on it.
+        assert o['free_to_pick'] == (
+            not o['supports'] and not o['leaned_on_by'] and not o['covered_by'])
+    # The plan takes nothing before what rests, leans or lies on it.
     step = {i: graph['removal_order'].index(i) for i in graph['removal_order']}
     for o in graph['objects']:
-        for above in o['supports'] + o['leaned_on_by']:
+        for above in o['supports'] + o['leaned_on_by'] + o['covered_by']:
             assert step[above] < step[o['id']], (above, o['id'])
     assert any(o['supports'] for o in graph['objects']), 'the demo has no stack'
     line = next(l for l in printed.splitlines() if l.startswith('run_offline: scene graph'))

@@ -86,7 +86,8 @@ class EstimatorReplayTest(unittest.TestCase):
                 self.assertIn(c.object_b, node[c.object_a].supports)
                 self.assertLess(step[c.object_b], step[c.object_a])
         for o in graph.objects:
-            self.assertEqual(o.free_to_pick, not o.supports and not o.leaned_on_by, o.id)
+            self.assertEqual(o.free_to_pick,
+                             not o.supports and not o.leaned_on_by and not o.covered_by, o.id)
             self.assertEqual(step[o.id], o.removal_step)
             self.assertIn(o.stable, (0, 1), 'every primitive has a collision shape')
         self.assertTrue(any(o.stable == 1 for o in graph.objects), 'nothing stands')

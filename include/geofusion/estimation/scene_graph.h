@@ -8,7 +8,7 @@
 
 #include "geofusion/estimation/contacts.h"
 
-#include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include <string>
 #include <vector>
@@ -24,7 +24,19 @@ struct SupportGraphObject {
   double visibility = 0.0;
   /// -1: not checked; 0 / 1: the stability check moved it / left it standing.
   int stable = -1;
+  /// Its box in the map frame (the model's bounding box at its pose: the box's centre and axes,
+  /// its edge lengths): which objects lie over it where no contact between them was found. A
+  /// zero size: not known, no such relation.
+  Eigen::Isometry3d box_pose = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d box_size = Eigen::Vector3d::Zero();
 };
+
+/// "Over" without a contact (buildSupportGraph): the share of the smaller footprint the two
+/// overlap, how much higher the upper one's centre and top are, its bottom's largest gap above
+/// the lower one's top (metres).
+constexpr double kOverShare = 0.2;
+constexpr double kOverAbove = 0.01;
+constexpr double kOverGap = 0.03;
 
 struct SupportGraphNode {
   int id = -1;
@@ -33,8 +45,12 @@ struct SupportGraphNode {
   std::vector<int> supported_by, supports;
   std::vector<int> leans_on, leaned_on_by;
   std::vector<int> beside;  ///< side-by-side contacts
-  int stable = -1;          ///< as SupportGraphObject::stable
-  /// Nothing rests or leans on it: taking it disturbs no other object.
+  /// No contact found between them, but one lies over the other (their footprints across
+  /// gravity overlap, the upper one higher and close above): a contact the map may have missed,
+  /// so the order and free_to_pick treat "covered by" as "supports".
+  std::vector<int> over, covered_by;
+  int stable = -1;  ///< as SupportGraphObject::stable
+  /// Nothing rests, leans or lies on it: taking it disturbs no other object.
   bool free_to_pick = true;
   int removal_step = -1;  ///< its place in SupportGraph::removal_order (0 first)
 };
@@ -54,6 +70,10 @@ struct SupportGraph {
 /// plane). A support contact: a supports b. A leaning contact: the object above (along
 /// -gravity, by the contact normal; by the centres when the normal is level) leans on the other.
 /// A side contact: beside each other. Contacts naming an object outside the list are skipped.
+/// Pairs of objects with boxes and no support or leaning contact between them: one is over the
+/// other when their footprints across gravity overlap by kOverShare of the smaller one, the upper
+/// one's centre and top higher by kOverAbove and its bottom at most kOverGap above the lower one's
+/// top.
 SupportGraph buildSupportGraph(const std::vector<SupportGraphObject>& objects,
                                const std::vector<FeatureContact>& contacts,
                                const Eigen::Vector3d& gravity);
