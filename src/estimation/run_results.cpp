@@ -77,6 +77,9 @@ void emitContacts(YAML::Emitter& out, const KeyframeResult& r) {
     out << YAML::Key << "type" << YAML::Value << shortName(c.type);
     out << YAML::Key << "kind" << YAML::Value << toString(c.kind);
     out << YAML::Key << "distance_residual" << YAML::Value << c.distance_residual;
+    // From a towards b: which of a leaning pair leans (scene_graph.h).
+    out << YAML::Key << "normal" << YAML::Value << YAML::Flow
+        << std::vector<double>{c.normal.x(), c.normal.y(), c.normal.z()};
     out << YAML::EndMap;
   }
   out << YAML::EndSeq;
@@ -553,6 +556,8 @@ bool readRunResults(const std::string& path, const ModelSet& models, RunResults*
       fc.type = contactTypeOfShortName(c["type"].as<std::string>());
       fc.kind = contactKindOfName(c["kind"].as<std::string>());
       fc.distance_residual = c["distance_residual"].as<double>();
+      // Files before the normal was written: none, so the support graph asks the heights.
+      fc.normal = c["normal"] ? yaml_io::parseVector3(c["normal"]) : Eigen::Vector3d::Zero();
       r.final_map.contacts.push_back(fc);
     }
     if (const YAML::Node sp = fm["support_plane"]) r.support_plane = readSupportPlane(sp);

@@ -516,6 +516,10 @@ def plan_metrics(evals):
             'plan_unsafe_per_scene': float(np.mean(unsafe)),
             'plan_unsafe_max_scene': int(max(unsafe)),
             'plan_steps_under_missed': sum(b['steps_under_missed_objects'] for _, b in blocks),
+            # Files written before the physics check have no figure: None.
+            'plan_unsafe_in_physics': (
+                sum(b['unsafe_steps_in_physics'] for _, b in blocks)
+                if all('unsafe_steps_in_physics' in b for _, b in blocks) else None),
             'plan_first_unsafe': first,
             'free_predicted': predicted,
             'free_correct': correct,
@@ -790,8 +794,9 @@ def _plan_targets(methods, add, suite=None):
     if ours.get('plan_scenes') is None or suite not in PERSISTENT_SUITES:
         return
     add('plan: %s 0 unsafe removal steps of true objects' % OURS,
-        '%d in %d scenes (max %d in one)' % (ours['plan_unsafe_steps'], ours['plan_scenes'],
-                                             ours['plan_unsafe_max_scene']),
+        '%d in %d scenes (max %d in one; %s of them disturb another object in physics)'
+        % (ours['plan_unsafe_steps'], ours['plan_scenes'], ours['plan_unsafe_max_scene'],
+           _int(ours.get("plan_unsafe_in_physics"))),
         ours['plan_unsafe_steps'] == 0, '%d steps' % ours['plan_unsafe_steps'])
 
 
@@ -1147,13 +1152,18 @@ def plan_section(methods):
           'Each final map\'s removal order (top first, docs/scene_graph.md) against the true '
           'support graph: a step is unsafe when it takes a true object while a true object the '
           'map also has still rests or leans on it; steps under objects the map missed are '
-          'counted apart. "Free to pick": the map\'s true objects it calls free, and of them free '
+          'counted apart. "In physics": the unsafe steps after which another true object moves '
+          'over the stability bounds (the true objects left, with and without the one taken, '
+          'under gravity); the others rest on a true contact whose objects do not bear on each '
+          'other. "Free to pick": the map\'s true objects it calls free, and of them free '
           'in the truth. A method without contacts calls every object free.', '']
     rows = [[n, str(m['plan_steps']), str(m['plan_unsafe_steps']),
+             _int(m.get("plan_unsafe_in_physics")),
              _num(m['plan_unsafe_per_scene'], 2), str(m['plan_steps_under_missed']),
              '%d / %d' % (m['free_correct'], m['free_predicted']), _num(m['free_precision'], 3),
              m['plan_first_unsafe'] or '-'] for n, m in have]
-    return md + _table(['method', 'steps (true objects)', 'unsafe', 'unsafe per scene',
+    return md + _table(['method', 'steps (true objects)', 'unsafe', 'unsafe in physics',
+                        'unsafe per scene',
                    'under a missed object', 'free right / called free', 'free precision',
                    'first unsafe step'], rows) + ['']
 

@@ -5,6 +5,7 @@
 #include "geofusion/evaluation/run_evaluation.h"
 #include "geofusion/evaluation/trajectory_metrics.h"
 
+#include "geofusion/estimation/map_stability.h"
 #include "geofusion/estimation/run_results.h"
 #include "geofusion/model/object_model.h"
 
@@ -503,6 +504,15 @@ TEST_F(RunEvaluationTest, ResultsAndEvaluationFilesRoundTrip) {
   results.keyframes[1].stage_one.status = SolveStatus::kConverged;
   results.keyframes[2].stage_one.status = SolveStatus::kFailed;
   results.final_map.stage_two.status = SolveStatus::kCostIncreased;
+  // A leaning contact whose normal runs down from a to b: a leans on b. Without the normal in the
+  // file the evaluator's support graph had b leaning on a.
+  FeatureContact leaning;
+  leaning.object_a = 0;
+  leaning.object_b = 1;
+  leaning.type = ContactType::kPlaneEdge;
+  leaning.kind = ContactKind::kLeaning;
+  leaning.normal = Eigen::Vector3d(0.6, 0.0, -0.8);
+  results.final_map.contacts.push_back(leaning);
   EXPECT_EQ(failedStages(results), 2);
   std::string error;
   ASSERT_TRUE(writeRunResults(path, results, &error)) << error;
@@ -520,7 +530,16 @@ TEST_F(RunEvaluationTest, ResultsAndEvaluationFilesRoundTrip) {
   EXPECT_EQ(back.keyframes[2].stage_one.status, SolveStatus::kFailed);
   EXPECT_EQ(back.final_map.stage_two.status, SolveStatus::kCostIncreased);
   EXPECT_EQ(failedStages(back), 2);
-  ASSERT_EQ(back.final_map.contacts.size(), 2u);
+  ASSERT_EQ(back.final_map.contacts.size(), 3u);
+  EXPECT_TRUE(back.final_map.contacts[2].normal.isApprox(Eigen::Vector3d(0.6, 0.0, -0.8), 1e-9));
+  const Eigen::Vector3d down(0, 0, -1);
+  const SupportGraph written =
+      mapSupportGraph(results.final_map.objects, results.final_map.contacts, down, nullptr);
+  const SupportGraph read =
+      mapSupportGraph(back.final_map.objects, back.final_map.contacts, down, nullptr);
+  EXPECT_EQ(written.find(10)->leans_on, std::vector<int>{11});  // ids of objects 0 and 1
+  EXPECT_EQ(read.find(10)->leans_on, std::vector<int>{11});
+  EXPECT_EQ(read.removal_order, written.removal_order);
   EXPECT_EQ(back.final_map.contacts[1].object_a, -1);
   EXPECT_EQ(back.final_map.contacts[1].object_b, 1);
   EXPECT_TRUE(back.support_plane.valid);

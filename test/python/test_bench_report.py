@@ -326,17 +326,18 @@ class PersistentErrorMetricsTest(unittest.TestCase):
         self.assertNotIn('lost objects: GeoFusion none', targets)
 
     def test_plan_pooled_over_scenes_with_its_target(self):
-        def planned(method, scene, unsafe, first, predicted, correct):
+        def planned(method, scene, unsafe, first, predicted, correct, in_physics=0):
             ev = make_eval(method, scene=scene)
             ev['scene_graph'] = {'removal_order': [3, 1, 2], 'true_steps': 3,
                                  'unsafe_steps': unsafe, 'steps_under_missed_objects': 1,
+                                 'unsafe_steps_in_physics': in_physics,
                                  'first_unsafe_step': first, 'warnings': [],
                                  'free_to_pick': {'predicted': predicted, 'correct': correct,
                                                   'true': 2}}
             return ev
         evals = [planned('GeoFusion', 's1', 0, '', 2, 2),
                  planned('GeoFusion', 's2', 2, 'took box #1 (true) before mug #4 (true) '
-                         'resting or leaning on it', 3, 1),
+                         'resting or leaning on it', 3, 1, in_physics=1),
                  planned('FbF', 's1', 1, 'took x', 3, 2)]
         plan = bench_report.plan_metrics(evals[:2])
         self.assertEqual(plan['plan_scenes'], 2)
@@ -345,6 +346,7 @@ class PersistentErrorMetricsTest(unittest.TestCase):
         self.assertAlmostEqual(plan['plan_unsafe_per_scene'], 1.0)
         self.assertEqual(plan['plan_unsafe_max_scene'], 2)
         self.assertEqual(plan['plan_steps_under_missed'], 2)
+        self.assertEqual(plan['plan_unsafe_in_physics'], 1)
         self.assertTrue(plan['plan_first_unsafe'].startswith('s2: took box #1'))
         self.assertAlmostEqual(plan['free_precision'], 3 / 5)
         self.assertIsNone(bench_report.plan_metrics([make_eval()])['plan_scenes'])
@@ -352,10 +354,11 @@ class PersistentErrorMetricsTest(unittest.TestCase):
         target = {t['target']: t for t in summary['targets']}[
             'plan: GeoFusion 0 unsafe removal steps of true objects']
         self.assertFalse(target['met'])
-        self.assertEqual(target['measured'], '2 in 2 scenes (max 2 in one)')
+        self.assertEqual(target['measured'], '2 in 2 scenes (max 2 in one; 1 of them disturb '
+                         'another object in physics)')
         section = '\n'.join(bench_report.plan_section(
             {'GeoFusion': summary['GeoFusion'], 'FbF': summary['FbF']}))
-        self.assertIn('| GeoFusion | 6 | 2 | 1.00 | 2 | 3 / 5 | 0.600 |', section)
+        self.assertIn('| GeoFusion | 6 | 2 | 1 | 1.00 | 2 | 3 / 5 | 0.600 |', section)
         self.assertTrue(section.startswith('## The support graph as a plan'), section)
         self.assertNotIn('plan: GeoFusion 0 unsafe removal steps of true objects',
                          {t['target'] for t in bench_report.summarize(

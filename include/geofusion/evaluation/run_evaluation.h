@@ -199,6 +199,12 @@ struct RunEvaluation {
   SupportGraph scene_graph;
   int plan_steps = 0, plan_unsafe_steps = 0, plan_steps_under_missed = 0;
   std::string first_unsafe_step;  ///< "took class #id (true) before class #id resting on it"
+  /// Each unsafe step checked in physics: the true objects left, with and without the one taken,
+  /// under gravity; it disturbs the rest when another object then moves more by over the
+  /// stability bounds. Unsafe steps that disturb nothing rest on a true contact labelled support
+  /// or leaning where the objects do not bear on each other. One line per unsafe step.
+  int plan_unsafe_steps_in_physics = 0;
+  std::vector<std::string> unsafe_steps;
   int free_predicted = 0, free_correct = 0, free_true = 0;
   std::vector<GraphObject> graph_true_objects, graph_estimated_objects;
   std::vector<GraphContact> graph_true_contacts, graph_estimated_contacts;
