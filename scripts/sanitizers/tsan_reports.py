@@ -25,7 +25,8 @@ import subprocess
 import sys
 from collections import Counter
 
-FRAME = re.compile(r'^(\s*#\d+ )(\S+) (\S+) \((.+)\+(0x[0-9a-f]+)\)\s*$')
+# A frame: its function (a C++ signature may hold spaces), location and module+offset.
+FRAME = re.compile(r'^(\s*#\d+ )(.+) (\S+) \(([^()\s]+)\+(0x[0-9a-f]+)\)\s*$')
 TYPES = {'data race': 'race', 'lock-order-inversion': 'deadlock', 'thread leak': 'thread',
          'destroy of a locked mutex': 'mutex', 'use of an invalid mutex': 'mutex',
          'unlock of an unlocked mutex': 'mutex', 'signal-unsafe call': 'signal',
