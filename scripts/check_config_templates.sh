@@ -20,7 +20,7 @@ while read -r file name sections; do
     echo "check_config_templates: config/$file matches the loader"
   fi
 done <<'LIST'
-scene_estimator.yaml scene_estimator method model_set input keyframes consistency refinement monitor association lifecycle stage_one relations stage_two physics background node
+scene_estimator.yaml scene_estimator method model_set input keyframes consistency refinement monitor association lifecycle stage_one relations stage_two physics scene_graph background node
 visual_odometry.yaml visual_odometry input visual_odometry
 detection_viewer.yaml detection_viewer input
 LIST

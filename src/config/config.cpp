@@ -36,6 +36,7 @@ class Table {
     relations();
     stageTwo();
     physics();
+    sceneGraph();
     background();
     visualOdometry();
     node();
@@ -683,6 +684,17 @@ class Table {
     for (const physics::StabilitySetting& s : physics::stabilitySettings())
       real(p + s.key, s.min, s.max, s.doc,
            [field = s.field](GeoFusionConfig& c) { return &(c.physics.*field); });
+  }
+  void sceneGraph() {
+    const std::string p = "scene_graph.";
+    real(p + "over_share", 0, 1,
+         "an object lies over another without a contact found when their footprints across "
+         "gravity overlap by this share of the smaller one (docs/scene_graph.md)",
+         [](GeoFusionConfig& c) { return &c.scene_graph.over_share; });
+    real(p + "over_above_m", 0, 1, "... its centre and top higher by at least this, m",
+         [](GeoFusionConfig& c) { return &c.scene_graph.over_above_m; });
+    real(p + "over_gap_m", 0, 1, "... its bottom at most this far above the other's top, m",
+         [](GeoFusionConfig& c) { return &c.scene_graph.over_gap_m; });
   }
   void visionMsgs() {
     text("vision_msgs.class_map",

@@ -42,7 +42,8 @@ bool exportMapScene(const std::vector<ObjectEstimate>& objects, const SupportPla
 SupportGraph mapSupportGraph(const std::vector<ObjectEstimate>& objects,
                              const std::vector<FeatureContact>& contacts,
                              const Eigen::Vector3d& gravity,
-                             const physics::StabilityResult* stability) {
+                             const physics::StabilityResult* stability,
+                             const SupportGraphConfig& config) {
   std::vector<SupportGraphObject> list;
   list.reserve(objects.size());
   for (const ObjectEstimate& o : objects) {
@@ -63,7 +64,7 @@ SupportGraph mapSupportGraph(const std::vector<ObjectEstimate>& objects,
     }
     list.push_back(std::move(g));
   }
-  return buildSupportGraph(list, contacts, gravity);
+  return buildSupportGraph(list, contacts, gravity, config);
 }
 
 }  // namespace geofusion

@@ -95,21 +95,21 @@ Footprint footprintOf(const SupportGraphObject& o, const Eigen::Vector3d& up) {
 }
 
 // Whether `upper` lies over `lower` (buildSupportGraph's rule).
-bool liesOver(const Footprint& upper, const Footprint& lower) {
+bool liesOver(const Footprint& upper, const Footprint& lower, const SupportGraphConfig& config) {
   if (!upper.known || !lower.known) return false;
-  if (upper.centre < lower.centre + kOverAbove || upper.top < lower.top + kOverAbove ||
-      upper.bottom > lower.top + kOverGap)
+  if (upper.centre < lower.centre + config.over_above_m ||
+      upper.top < lower.top + config.over_above_m || upper.bottom > lower.top + config.over_gap_m)
     return false;
   std::vector<Polygon2> shared;
   bg::intersection(upper.outline, lower.outline, shared);
   double area = 0.0;
   for (const Polygon2& p : shared) area += bg::area(p);
-  return area >= kOverShare * std::min(upper.area, lower.area);
+  return area >= config.over_share * std::min(upper.area, lower.area);
 }
 
 // "Over" for the pairs with no support or leaning relation between them.
 void addOverRelations(const std::vector<SupportGraphObject>& objects, const Eigen::Vector3d& up,
-                      std::vector<SupportGraphNode>* nodes) {
+                      const SupportGraphConfig& config, std::vector<SupportGraphNode>* nodes) {
   std::vector<Footprint> feet;
   for (const SupportGraphObject& o : objects) feet.push_back(footprintOf(o, up));
   auto related = [&](const SupportGraphNode& n, int id) {
@@ -119,7 +119,8 @@ void addOverRelations(const std::vector<SupportGraphObject>& objects, const Eige
   };
   for (std::size_t i = 0; i < objects.size(); ++i)
     for (std::size_t j = 0; j < objects.size(); ++j) {
-      if (i == j || !liesOver(feet[i], feet[j]) || related((*nodes)[i], objects[j].id)) continue;
+      if (i == j || !liesOver(feet[i], feet[j], config) || related((*nodes)[i], objects[j].id))
+        continue;
       addOnce(&(*nodes)[i].over, objects[j].id);
       addOnce(&(*nodes)[j].covered_by, objects[i].id);
     }
@@ -191,7 +192,7 @@ std::string supportGraphName(const SupportGraph& graph, int id) {
 
 SupportGraph buildSupportGraph(const std::vector<SupportGraphObject>& objects,
                                const std::vector<FeatureContact>& contacts,
-                               const Eigen::Vector3d& gravity) {
+                               const Eigen::Vector3d& gravity, const SupportGraphConfig& config) {
   SupportGraph graph;
   const Eigen::Vector3d up =
       gravity.norm() > 0.0 ? Eigen::Vector3d(-gravity.normalized()) : Eigen::Vector3d::UnitZ();
@@ -203,7 +204,7 @@ SupportGraph buildSupportGraph(const std::vector<SupportGraphObject>& objects,
     graph.nodes.push_back(node);
   }
   for (const FeatureContact& c : contacts) addRelation(objects, c, up, &graph.nodes);
-  addOverRelations(objects, up, &graph.nodes);
+  addOverRelations(objects, up, config, &graph.nodes);
   for (SupportGraphNode& n : graph.nodes)
     n.free_to_pick = n.supports.empty() && n.leaned_on_by.empty() && n.covered_by.empty();
   orderRemovals(objects, up, &graph);

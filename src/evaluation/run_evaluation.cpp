@@ -529,19 +529,20 @@ void evaluateTableClearance(const GroundTruth& gt, const RunResults& results, co
   }
 }
 
-// The stability settings of the run: its configuration's `physics` section (the defaults when
-// the results carry none or it does not load; a warning says so).
-physics::StabilityConfig stabilitySettings(const RunResults& results, RunEvaluation* ev) {
+// The run's configuration, for its `physics` and `scene_graph` settings (the defaults when the
+// results carry none or it does not load; a warning in `ev`, when given, says so).
+GeoFusionConfig resultsConfig(const RunResults& results, RunEvaluation* ev) {
   GeoFusionConfig config;
-  if (results.config_yaml.empty()) return config.physics;
+  if (results.config_yaml.empty()) return config;
   ConfigReport report;
   if (!loadConfigText(results.config_yaml, "the results' configuration", &config, &report)) {
-    ev->warnings.push_back("stability: the results' configuration does not load (" +
-                           (report.errors.empty() ? std::string("?") : report.errors.front()) +
-                           "); the default physics settings are used");
-    return GeoFusionConfig().physics;
+    if (ev)
+      ev->warnings.push_back("the results' configuration does not load (" +
+                             (report.errors.empty() ? std::string("?") : report.errors.front()) +
+                             "); the default physics and scene_graph settings are used");
+    return GeoFusionConfig();
   }
-  return config.physics;
+  return config;
 }
 
 // "class #id (true)" for a body of the map's stability check, "table" for the plane.
@@ -557,7 +558,7 @@ std::string describeBody(const std::vector<ObjectEstimate>& map, const MapScore&
 void evaluateStability(const GroundTruth& gt, const RunResults& results, const MapScore& score,
                        RunEvaluation* ev) {
   const std::vector<ObjectEstimate>& map = results.final_map.objects;
-  ev->stability_config = stabilitySettings(results, ev);
+  ev->stability_config = resultsConfig(results, ev).physics;
   const Plane table = tableOf(gt, results, *ev);
   SupportPlane plane;
   plane.valid = true;
@@ -645,8 +646,10 @@ void evaluateSceneGraph(const GroundTruth& gt, const RunResults& results, const 
                         RunEvaluation* ev) {
   const std::vector<ObjectEstimate>& map = results.final_map.objects;
   const Plane table = tableOf(gt, results, *ev);
+  // (a configuration that does not load was said by evaluateStability)
   ev->scene_graph = mapSupportGraph(map, results.final_map.contacts, -table.n,
-                                    ev->has_stability ? &ev->stability : nullptr);
+                                    ev->has_stability ? &ev->stability : nullptr,
+                                    resultsConfig(results, nullptr).scene_graph);
   const SupportGraph truth = trueSceneGraph(gt);
   std::map<int, int> truth_of_id;  // map id -> true index
   for (std::size_t i = 0; i < map.size() && i < score.match.size(); ++i)

@@ -192,7 +192,8 @@ class PyEstimator {
     const physics::StabilityResult stability = checkMapStability(
         estimator_->objects(), &plane, config_.estimator.gravity, config_.physics);
     const SupportGraph g =
-        mapSupportGraph(estimator_->objects(), contacts_, config_.estimator.gravity, &stability);
+        mapSupportGraph(estimator_->objects(), contacts_, config_.estimator.gravity, &stability,
+                        config_.scene_graph);
     py::list nodes;
     for (const SupportGraphNode& n : g.nodes)
       nodes.append(py::dict(

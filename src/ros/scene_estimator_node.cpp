@@ -871,7 +871,8 @@ geofusion::SceneGraph SceneEstimatorNode::sceneGraphOf(const KeyframeResult& map
       ROS_WARN_STREAM_THROTTLE(warn_period_s_, "geofusion: scene graph: stability: " << w);
   }
   const SupportGraph graph =
-      mapSupportGraph(map.objects, map.contacts, gravity, check_stability ? &stability : nullptr);
+      mapSupportGraph(map.objects, map.contacts, gravity, check_stability ? &stability : nullptr,
+                      config_.scene_graph);
   for (const std::string& w : graph.warnings)
     ROS_WARN_STREAM_THROTTLE(warn_period_s_, "geofusion: scene graph: " << w);
   return toSceneGraphMsg(graph, header);

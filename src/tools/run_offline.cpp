@@ -505,7 +505,7 @@ geofusion::physics::StabilityResult checkFinalMap(const geofusion::GeoFusionConf
       checkMapStability(results->final_map.objects, &results->support_plane,
                         config.estimator.gravity, config.physics);
   results->scene_graph = mapSupportGraph(results->final_map.objects, results->final_map.contacts,
-                                         config.estimator.gravity, &s);
+                                         config.estimator.gravity, &s, config.scene_graph);
   results->has_scene_graph = true;
   *check_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

@@ -123,6 +123,13 @@ TEST(SupportGraph, AnObjectLyingOverAnotherWithoutAContactIsTakenFirst) {
   EXPECT_TRUE(g.find(4)->over.empty());
   // Seen best, the bowl would go first; the box over it goes before it.
   EXPECT_EQ(g.removal_order, (std::vector<int>{3, 2, 1, 4}));
+  // The settings decide: asked for 90 % of the smaller footprint (the box's is about 40 % over
+  // the bowl), nothing lies over the bowl.
+  SupportGraphConfig strict;
+  strict.over_share = 0.9;
+  EXPECT_TRUE(buildSupportGraph(objects, contacts, Eigen::Vector3d(0, 0, -9.81), strict)
+                  .find(1)
+                  ->covered_by.empty());
   // With the contact found, the relation is the contact's, not "over".
   std::vector<FeatureContact> leaning = contacts;
   leaning.push_back(contact(0, 1, ContactKind::kLeaning, Eigen::Vector3d(1, 0, 1).normalized()));

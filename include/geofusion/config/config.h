@@ -12,6 +12,7 @@
 #include "geofusion/estimation/frame_by_frame.h"
 #include "geofusion/estimation/keyframe_selector.h"
 #include "geofusion/estimation/scene_estimator.h"
+#include "geofusion/estimation/scene_graph.h"
 #include "geofusion/model/surface_features.h"
 #include "geofusion/odometry/visual_odometry.h"
 #include "geofusion/physics/stability.h"
@@ -90,6 +91,8 @@ struct GeoFusionConfig {
   bool background_enabled = true;
   /// The stability check (evaluation and the results' summary).
   physics::StabilityConfig physics;
+  /// The support graph as a plan: "over" without a contact (scene_graph.h).
+  SupportGraphConfig scene_graph;
   BackgroundMapConfig background;
   VisualOdometryConfig visual_odometry;
   NodeConfig node;

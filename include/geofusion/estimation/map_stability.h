@@ -32,6 +32,7 @@ bool exportMapScene(const std::vector<ObjectEstimate>& objects, const SupportPla
 SupportGraph mapSupportGraph(const std::vector<ObjectEstimate>& objects,
                              const std::vector<FeatureContact>& contacts,
                              const Eigen::Vector3d& gravity,
-                             const physics::StabilityResult* stability);
+                             const physics::StabilityResult* stability,
+                             const SupportGraphConfig& config = SupportGraphConfig());
 
 }  // namespace geofusion

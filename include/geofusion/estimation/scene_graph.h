@@ -31,12 +31,12 @@ struct SupportGraphObject {
   Eigen::Vector3d box_size = Eigen::Vector3d::Zero();
 };
 
-/// "Over" without a contact (buildSupportGraph): the share of the smaller footprint the two
-/// overlap, how much higher the upper one's centre and top are, its bottom's largest gap above
-/// the lower one's top (metres).
-constexpr double kOverShare = 0.2;
-constexpr double kOverAbove = 0.01;
-constexpr double kOverGap = 0.03;
+/// "Over" without a contact (buildSupportGraph; the `scene_graph` settings).
+struct SupportGraphConfig {
+  double over_share = 0.2;     ///< the share of the smaller footprint the two overlap, at least
+  double over_above_m = 0.01;  ///< the upper one's centre and top higher by at least this
+  double over_gap_m = 0.03;    ///< its bottom at most this far above the lower one's top
+};
 
 struct SupportGraphNode {
   int id = -1;
@@ -71,12 +71,13 @@ struct SupportGraph {
 /// -gravity, by the contact normal; by the centres when the normal is level) leans on the other.
 /// A side contact: beside each other. Contacts naming an object outside the list are skipped.
 /// Pairs of objects with boxes and no support or leaning contact between them: one is over the
-/// other when their footprints across gravity overlap by kOverShare of the smaller one, the upper
-/// one's centre and top higher by kOverAbove and its bottom at most kOverGap above the lower one's
-/// top.
+/// other when their footprints across gravity overlap by over_share of the smaller one, the upper
+/// one's centre and top higher by over_above_m and its bottom at most over_gap_m above the lower
+/// one's top (`config`).
 SupportGraph buildSupportGraph(const std::vector<SupportGraphObject>& objects,
                                const std::vector<FeatureContact>& contacts,
-                               const Eigen::Vector3d& gravity);
+                               const Eigen::Vector3d& gravity,
+                               const SupportGraphConfig& config = SupportGraphConfig());
 
 /// "class #id" of an object of the graph ("table" for the support plane, "#id" when unknown).
 std::string supportGraphName(const SupportGraph& graph, int id);
