@@ -530,16 +530,15 @@ void evaluateTableClearance(const GroundTruth& gt, const RunResults& results, co
 }
 
 // The run's configuration, for its `physics` and `scene_graph` settings (the defaults when the
-// results carry none or it does not load; a warning in `ev`, when given, says so).
+// results carry none or it does not load; a warning in `ev` says so).
 GeoFusionConfig resultsConfig(const RunResults& results, RunEvaluation* ev) {
   GeoFusionConfig config;
   if (results.config_yaml.empty()) return config;
   ConfigReport report;
   if (!loadConfigText(results.config_yaml, "the results' configuration", &config, &report)) {
-    if (ev)
-      ev->warnings.push_back("the results' configuration does not load (" +
-                             (report.errors.empty() ? std::string("?") : report.errors.front()) +
-                             "); the default physics and scene_graph settings are used");
+    ev->warnings.push_back("the results' configuration does not load (" +
+                           (report.errors.empty() ? std::string("?") : report.errors.front()) +
+                           "); the default physics and scene_graph settings are used");
     return GeoFusionConfig();
   }
   return config;
@@ -556,9 +555,9 @@ std::string describeBody(const std::vector<ObjectEstimate>& map, const MapScore&
 // Physical stability (issue 50): the final map on its support plane under gravity, and the true
 // scene on the true table as the reference; the share of the true objects that stay put.
 void evaluateStability(const GroundTruth& gt, const RunResults& results, const MapScore& score,
-                       RunEvaluation* ev) {
+                       const physics::StabilityConfig& config, RunEvaluation* ev) {
   const std::vector<ObjectEstimate>& map = results.final_map.objects;
-  ev->stability_config = resultsConfig(results, ev).physics;
+  ev->stability_config = config;
   const Plane table = tableOf(gt, results, *ev);
   SupportPlane plane;
   plane.valid = true;
@@ -643,13 +642,11 @@ bool disturbsInPhysics(const GroundTruth& gt, const std::set<int>& taken, int t,
 // object is unsafe when a true object still there, which the map also has, rests or leans on it;
 // "free to pick" against the truth's.
 void evaluateSceneGraph(const GroundTruth& gt, const RunResults& results, const MapScore& score,
-                        RunEvaluation* ev) {
+                        const SupportGraphConfig& config, RunEvaluation* ev) {
   const std::vector<ObjectEstimate>& map = results.final_map.objects;
   const Plane table = tableOf(gt, results, *ev);
-  // (a configuration that does not load was said by evaluateStability)
   ev->scene_graph = mapSupportGraph(map, results.final_map.contacts, -table.n,
-                                    ev->has_stability ? &ev->stability : nullptr,
-                                    resultsConfig(results, nullptr).scene_graph);
+                                    ev->has_stability ? &ev->stability : nullptr, config);
   const SupportGraph truth = trueSceneGraph(gt);
   std::map<int, int> truth_of_id;  // map id -> true index
   for (std::size_t i = 0; i < map.size() && i < score.match.size(); ++i)
@@ -822,8 +819,9 @@ bool evaluateRun(const GroundTruth& gt, const RunResults& results, const Evaluat
   evaluateDetectorErrors(gt, results.final_map.objects, score, config, &ev);
   evaluatePlausibility(gt, results, score, config, &ev);
   evaluateTableClearance(gt, results, score, &ev);
-  evaluateStability(gt, results, score, &ev);
-  evaluateSceneGraph(gt, results, score, &ev);
+  const GeoFusionConfig run_config = resultsConfig(results, &ev);  // once: it parses YAML
+  evaluateStability(gt, results, score, run_config.physics, &ev);
+  evaluateSceneGraph(gt, results, score, run_config.scene_graph, &ev);
   evaluateLifecycle(gt, results, frames, score, config, &ev);
   *evaluation = std::move(ev);
   return true;
