@@ -568,6 +568,7 @@ void evaluateStability(const GroundTruth& gt, const RunResults& results, const M
     if (i >= score.match.size() || score.match[i] < 0) continue;
     const physics::BodyMotion* m = ev->stability.find(map[i].id);
     ++ev->stability_true_objects;
+    ev->stability_true_id[map[i].id] = score.match[i];
     ev->stability_true_stable += m && m->stable;
     ev->stability_true_interpenetrating += m && m->interpenetrating;
   }
@@ -830,9 +831,11 @@ bool evaluateRun(const GroundTruth& gt, const RunResults& results, const Evaluat
 namespace {
 
 // One stability check as JSON: the counts, the bounds and every body's motion.
-nlohmann::json stabilityResultJson(const physics::StabilityResult& r) {
+// `true_id`: the true object a map body matched (-1: none; absent for the truth's bodies).
+nlohmann::json stabilityResultJson(const physics::StabilityResult& r,
+                                   const std::map<int, int>* true_id = nullptr) {
   nlohmann::json bodies = nlohmann::json::array();
-  for (const physics::BodyMotion& m : r.bodies)
+  for (const physics::BodyMotion& m : r.bodies) {
     bodies.push_back({{"id", m.id},
                       {"simulated", m.simulated},
                       {"problem", m.problem},
@@ -842,6 +845,11 @@ nlohmann::json stabilityResultJson(const physics::StabilityResult& r) {
                       {"penetrating_id", m.penetrating_id},
                       {"interpenetrating", m.interpenetrating},
                       {"stable", m.stable}});
+    if (true_id) {
+      const auto it = true_id->find(m.id);
+      bodies.back()["true_id"] = it == true_id->end() ? -1 : it->second;
+    }
+  }
   return {{"has_plane", r.has_plane},
           {"simulated", r.simulated},
           {"interpenetrating", r.interpenetrating},
@@ -884,7 +892,7 @@ nlohmann::json stabilityJson(const RunEvaluation& e) {
           {"true_stable", e.stability_true_stable},
           {"true_interpenetrating", e.stability_true_interpenetrating},
           {"least_stable_pair", e.least_stable_pair},
-          {"map", stabilityResultJson(e.stability)},
+          {"map", stabilityResultJson(e.stability, &e.stability_true_id)},
           {"ground_truth", stabilityResultJson(e.stability_truth)}};
 }
 

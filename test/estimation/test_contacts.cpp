@@ -57,6 +57,35 @@ TEST(Contacts, BoxOnTableIsOnePlanePlaneSupport) {
   EXPECT_EQ(again[0].object_a, 1);
 }
 
+// A narrow box (4 cm deep) on one bottom edge, tilted 10 degrees, its lowest edge 1 mm above the
+// table: its bottom face is 10 degrees off and its centre 4.5 mm up, within the distance threshold.
+// It rests on the edge, so the contact is the table's plane with that edge (a box's edges are
+// 0-radius curve features: plane-curve; a plane-plane factor would turn the box flat); tilted 4
+// degrees, the bottom face is the contact.
+TEST(Contacts, AFaceTenDegreesOffIsNoPlanePlaneContact) {
+  const ObjectModel table = boxModel(1.0, 1.0, 0.04), box = boxModel(0.04, 0.16, 0.2);
+  const PosedModel t{&table, at(0, 0, -0.02)};
+  auto on_edge = [&](double deg) {  // the edge at x = -0.02 of the bottom 1 mm above the table
+    const Eigen::Matrix3d R = rot(deg, Eigen::Vector3d::UnitY());
+    const Eigen::Vector3d p = Eigen::Vector3d(0, 0, 0.001) - R * Eigen::Vector3d(-0.02, 0, -0.1);
+    return PosedModel{&box, at(p.x(), p.y(), p.z(), R)};
+  };
+  const auto tilted = findAllContacts({t, on_edge(-10)}, kGravity);
+  ASSERT_EQ(tilted.size(), 1u);
+  EXPECT_EQ(tilted[0].type, ContactType::kPlaneCurve);
+  EXPECT_NEAR(box.features.curves[tilted[0].feature_b.index].radius_m, 0.0, 1e-9);
+  EXPECT_TRUE(tilted[0].support());
+  EXPECT_NEAR(tilted[0].distance_residual, 0.001, 2e-4);
+  ContactConfig fourteen_degrees;  // the threshold before: the face made the contact
+  fourteen_degrees.eps_n_pp = 0.03;
+  const auto before = findAllContacts({t, on_edge(-10)}, kGravity, fourteen_degrees);
+  ASSERT_EQ(before.size(), 1u);
+  EXPECT_EQ(before[0].type, ContactType::kPlanePlane);
+  const auto nearly_flat = findAllContacts({t, on_edge(-4)}, kGravity);
+  ASSERT_EQ(nearly_flat.size(), 1u);
+  EXPECT_EQ(nearly_flat[0].type, ContactType::kPlanePlane);
+}
+
 TEST(Contacts, FloatingTiltedOrBesideTheTableIsNoContact) {
   const ObjectModel table = boxModel(1.0, 1.0, 0.04), box = boxModel(0.1, 0.16, 0.2);
   const PosedModel t{&table, at(0, 0, -0.02)};

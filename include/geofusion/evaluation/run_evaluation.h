@@ -189,7 +189,8 @@ struct RunEvaluation {
   /// Of the map's true (matched) objects: how many, how many stable, how many start
   /// interpenetrating (reported apart, not stable).
   int stability_true_objects = 0, stability_true_stable = 0, stability_true_interpenetrating = 0;
-  std::string least_stable_pair;  ///< as deepest_pair, "table" for the plane
+  std::map<int, int> stability_true_id;  ///< map object id -> the true object it matched
+  std::string least_stable_pair;         ///< as deepest_pair, "table" for the plane
   /// The final map's support graph as a plan (estimation/scene_graph.h) against the truth's: the
   /// removal order's steps that take a true object; unsafe: a true object the map also has still
   /// rests or leans on it (the order's fault); under a missed object: only objects the map lacks

@@ -56,8 +56,9 @@ struct SuiteSpec {
 };
 
 /// Bumped whenever the generator's output for the same request changes (cached scenes made by
-/// another version are remade).
-constexpr int kGeneratorVersion = 4;
+/// another version are remade). v5: the true contacts' types with eps_n_pp 6 degrees (a face
+/// 6-14 degrees off is a plane-edge contact).
+constexpr int kGeneratorVersion = 5;
 
 /// Every setting of a suite that shapes its data, one line (the cache key of generated scenes).
 std::string describeSuite(const SuiteSpec& suite);
