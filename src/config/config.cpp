@@ -525,6 +525,16 @@ class Table {
          [f](GeoFusionConfig& c) { return &f(c)->separation_margin_m; });
     real("stage_two.separation_sigma_m", 1e-6, 0.1, "sigma of the separation factors, m",
          [f](GeoFusionConfig& c) { return &f(c)->separation_sigma_m; });
+    integer("stage_two.seating_rounds", 0, 10,
+            "the final solve checks the map in physics; objects it drops are seated by stage II "
+            "on the contacts found where they came to rest, at most this often (0: off; "
+            "docs/estimator.md, step 8)",
+            [f](GeoFusionConfig& c) { return &f(c)->seating_rounds; });
+    real("stage_two.seat_max_translation_m", 0, 1,
+         "... an object is seated when it moved less than this in the check, m",
+         [f](GeoFusionConfig& c) { return &f(c)->seat_max_translation_m; });
+    real("stage_two.seat_max_rotation_deg", 0, 180, "... and turned less than this, deg",
+         [f](GeoFusionConfig& c) { return &f(c)->seat_max_rotation_deg; });
   }
   void background() {
     flag("background.enabled", "build the OctoMap of the static background",
@@ -676,14 +686,14 @@ class Table {
   }
   void physics() {
     const std::string p = "physics.";
-    auto f = [](GeoFusionConfig& c) { return &c.physics; };
+    auto f = [](GeoFusionConfig& c) { return &c.estimator.physics; };
     flag(p + "convex_parts",
          "stability check: bodies of the models' convex parts (true) or of their convex hulls, as "
          "the generator settles its scenes (false)",
          [f](GeoFusionConfig& c) { return &f(c)->convex_parts; });
     for (const physics::StabilitySetting& s : physics::stabilitySettings())
       real(p + s.key, s.min, s.max, s.doc,
-           [field = s.field](GeoFusionConfig& c) { return &(c.physics.*field); });
+           [field = s.field](GeoFusionConfig& c) { return &(c.estimator.physics.*field); });
   }
   void sceneGraph() {
     const std::string p = "scene_graph.";

@@ -826,14 +826,12 @@ StageReport SceneEstimator::runRelationsAndStageTwo(const Keyframe* kf, StageTim
   const std::vector<std::size_t> reported = reportedTracks();
   const std::vector<std::size_t> local = localMap(reported, kf == nullptr);
   std::vector<PosedModel> posed;
-  std::map<int, int> local_of_id = {{-1, -1}}, reported_of_id = {{-1, -1}};
+  std::map<int, int> local_of_id = {{-1, -1}};
   for (std::size_t i = 0; i < local.size(); ++i) {
     const Track& tr = tracks_[reported[local[i]]];
     posed.push_back({tr.model.get(), tr.T_stage_one});
     local_of_id[tr.id] = static_cast<int>(i);
   }
-  for (std::size_t i = 0; i < reported.size(); ++i)
-    reported_of_id[tracks_[reported[i]].id] = static_cast<int>(i);
   std::vector<ObjectPair> held;
   for (const std::pair<int, int>& pair : held_contacts_) {
     const auto a = local_of_id.find(pair.first), b = local_of_id.find(pair.second);
@@ -843,7 +841,35 @@ StageReport SceneEstimator::runRelationsAndStageTwo(const Keyframe* kf, StageTim
   PosedModel ground{support_model_.get(), T_map_support_};
   const std::vector<FeatureContact> local_contacts = inferRelations(
       posed, support_model_ ? &ground : nullptr, config_.gravity, config_.contacts, held);
+  setContacts(local_contacts, local, reported);
+  if (timings) timings->relations_ms = msSince(t0);
 
+  t0 = Clock::now();
+  const StageTwoSummary s =
+      solveStageTwo(local, reported, local_contacts, support_model_ ? &ground : nullptr, !kf);
+  // The final solve's physical check: what it drops is seated, and checked again. The map's
+  // contacts stay those found at the stage I poses (replacing a seated object's with those where
+  // it came to rest was measured worse: docs/stability.md).
+  std::vector<FeatureContact> seated = local_contacts;
+  for (int round = 0; !kf && round < config_.stage_two.seating_rounds; ++round)
+    if (!seatDropped(local, reported, support_model_ ? &ground : nullptr, &seated)) break;
+  // Candidates follow their stage I / initial pose.
+  for (Track& tr : tracks_)
+    if (!tr.confirmed) tr.T_refined = tr.T_stage_one;
+  if (timings) timings->stage_two_ms = msSince(t0);
+  return {s.status, s.iterations, s.initial_cost, s.final_cost};
+}
+
+void SceneEstimator::setContacts(const std::vector<FeatureContact>& local_contacts,
+                                 const std::vector<std::size_t>& local,
+                                 const std::vector<std::size_t>& reported) {
+  std::set<int> local_ids = {-1}, reported_ids = {-1};
+  std::map<int, int> reported_of_id = {{-1, -1}};
+  for (std::size_t i : local) local_ids.insert(tracks_[reported[i]].id);
+  for (std::size_t i = 0; i < reported.size(); ++i) {
+    reported_ids.insert(tracks_[reported[i]].id);
+    reported_of_id[tracks_[reported[i]].id] = static_cast<int>(i);
+  }
   std::vector<FeatureContact> by_id;
   auto local_id = [&](int i) { return i < 0 ? -1 : tracks_[reported[local[i]]].id; };
   for (FeatureContact c : local_contacts) {
@@ -853,9 +879,8 @@ StageReport SceneEstimator::runRelationsAndStageTwo(const Keyframe* kf, StageTim
   // Kept: the contacts the relations could not find again (an end outside the local map; the
   // support is in it) between objects that still exist.
   for (const FeatureContact& c : contacts_by_id_) {
-    const bool found_again = local_of_id.count(c.object_a) && local_of_id.count(c.object_b);
-    if (found_again || !reported_of_id.count(c.object_a) || !reported_of_id.count(c.object_b))
-      continue;
+    const bool found_again = local_ids.count(c.object_a) && local_ids.count(c.object_b);
+    if (found_again || !reported_ids.count(c.object_a) || !reported_ids.count(c.object_b)) continue;
     by_id.push_back(c);
   }
   contacts_by_id_ = by_id;
@@ -866,16 +891,66 @@ StageReport SceneEstimator::runRelationsAndStageTwo(const Keyframe* kf, StageTim
     c.object_a = reported_of_id[c.object_a], c.object_b = reported_of_id[c.object_b];
     contacts_.push_back(c);
   }
-  if (timings) timings->relations_ms = msSince(t0);
+}
 
-  t0 = Clock::now();
-  const StageTwoSummary s =
-      solveStageTwo(local, reported, local_contacts, support_model_ ? &ground : nullptr, !kf);
-  // Candidates follow their stage I / initial pose.
-  for (Track& tr : tracks_)
-    if (!tr.confirmed) tr.T_refined = tr.T_stage_one;
-  if (timings) timings->stage_two_ms = msSince(t0);
-  return {s.status, s.iterations, s.initial_cost, s.final_cost};
+bool SceneEstimator::seatDropped(const std::vector<std::size_t>& local,
+                                 const std::vector<std::size_t>& reported, const PosedModel* ground,
+                                 std::vector<FeatureContact>* contacts) {
+  const StageTwoConfig& config = config_.stage_two;
+  std::vector<Track*> solved;
+  std::vector<physics::StabilityBody> bodies;
+  for (std::size_t i : local) {
+    Track& tr = tracks_[reported[i]];
+    bodies.push_back({tr.id, tr.model, tr.T_refined});
+    solved.push_back(&tr);
+  }
+  const physics::StabilityPlane plane{support_.normal, support_.height};
+  const physics::StabilityResult check = physics::checkStability(
+      bodies, ground && support_.valid ? &plane : nullptr, config_.gravity, config_.physics);
+  // Each object where the simulation left it, if it dropped it within the bounds.
+  std::vector<PosedModel> rested;
+  std::vector<bool> dropped(solved.size(), false);
+  for (std::size_t i = 0; i < solved.size(); ++i) {
+    const physics::BodyMotion& m = check.bodies[i];
+    dropped[i] = m.simulated && !m.interpenetrating && !m.stable &&
+                 m.translation_m < config.seat_max_translation_m &&
+                 m.rotation_deg < config.seat_max_rotation_deg;
+    rested.push_back({solved[i]->model.get(), dropped[i] ? m.T_world_end : solved[i]->T_refined});
+  }
+  if (std::none_of(dropped.begin(), dropped.end(), [](bool d) { return d; })) return false;
+  // A dropped object's contacts in the solve: those where it came to rest.
+  auto touches_dropped = [&](const FeatureContact& c) {
+    return (c.object_a >= 0 && dropped[c.object_a]) || (c.object_b >= 0 && dropped[c.object_b]);
+  };
+  contacts->erase(std::remove_if(contacts->begin(), contacts->end(), touches_dropped),
+                  contacts->end());
+  for (const FeatureContact& c :
+       inferRelations(rested, ground, config_.gravity, config_.contacts, {}))
+    if (touches_dropped(c)) contacts->push_back(c);
+  // Stage II again (with its separation rounds), the dropped objects starting where they came
+  // to rest: seated on those contacts against their stage I priors, parted from what they reach.
+  std::vector<Eigen::Isometry3d> before;
+  for (std::size_t i = 0; i < solved.size(); ++i) {
+    before.push_back(solved[i]->T_refined);
+    if (dropped[i]) solved[i]->T_refined = rested[i].T_world_obj;
+  }
+  if (solveStageTwo(local, reported, *contacts, ground, true).solved) return true;
+  for (std::size_t i = 0; i < solved.size(); ++i) solved[i]->T_refined = before[i];
+  return false;
+}
+
+std::vector<Separation> SceneEstimator::localSeparations(const std::map<int, int>& index_of_id,
+                                                         bool has_ground) const {
+  std::vector<Separation> separations;  // local indices
+  for (Separation s : separations_by_id_) {
+    const auto a = index_of_id.find(s.object_a), b = index_of_id.find(s.object_b);
+    if (config_.stage_two.separation_rounds == 0 || a == index_of_id.end() ||
+        b == index_of_id.end() || (s.object_a < 0 && !has_ground))
+      continue;
+    s.object_a = a->second, s.object_b = b->second;
+    separations.push_back(s);
+  }
+  return separations;
 }
 
 namespace {
@@ -927,15 +1002,7 @@ StageTwoSummary SceneEstimator::solveStageTwo(const std::vector<std::size_t>& lo
     solved.push_back(&tr);
   }
   const StageTwoConfig& config = config_.stage_two;
-  std::vector<Separation> separations;  // local indices
-  for (Separation s : separations_by_id_) {
-    const auto a = index_of_id.find(s.object_a), b = index_of_id.find(s.object_b);
-    if (config.separation_rounds == 0 || a == index_of_id.end() || b == index_of_id.end() ||
-        (s.object_a < 0 && !ground))
-      continue;
-    s.object_a = a->second, s.object_b = b->second;
-    separations.push_back(s);
-  }
+  std::vector<Separation> separations = localSeparations(index_of_id, ground != nullptr);
   StageTwoSummary s;
   std::vector<bool> held;  // the first solve: every object
   for (int round = 0; round <= config.separation_rounds; ++round) {

@@ -821,7 +821,7 @@ bool evaluateRun(const GroundTruth& gt, const RunResults& results, const Evaluat
   evaluatePlausibility(gt, results, score, config, &ev);
   evaluateTableClearance(gt, results, score, &ev);
   const GeoFusionConfig run_config = resultsConfig(results, &ev);  // once: it parses YAML
-  evaluateStability(gt, results, score, run_config.physics, &ev);
+  evaluateStability(gt, results, score, run_config.estimator.physics, &ev);
   evaluateSceneGraph(gt, results, score, run_config.scene_graph, &ev);
   evaluateLifecycle(gt, results, frames, score, config, &ev);
   *evaluation = std::move(ev);

@@ -251,6 +251,7 @@ StabilityResult checkStability(const std::vector<StabilityBody>& bodies,
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     BodyMotion m;
     m.id = bodies[i].id;
+    m.T_world_end = bodies[i].T_world_obj;
     std::vector<TriangleMesh> shapes;
     if (!bodies[i].model)
       m.problem = "no model";
@@ -291,7 +292,8 @@ StabilityResult checkStability(const std::vector<StabilityBody>& bodies,
     BodyMotion& m = result.bodies[prepared[k].index];
     displacement.push_back(world.centreOfMass(k) - com_before[k]);
     m.translation_m = displacement.back().norm();
-    m.rotation_deg = rotationDeg(bodies[prepared[k].index].T_world_obj, world.pose(k));
+    m.T_world_end = world.pose(k);
+    m.rotation_deg = rotationDeg(bodies[prepared[k].index].T_world_obj, m.T_world_end);
   }
   summarise(prepared, pairs, displacement, c, &result);
   return result;

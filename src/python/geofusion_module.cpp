@@ -164,7 +164,7 @@ class PyEstimator {
   py::dict stability() const {
     const SupportPlane& plane = estimator_->supportPlane();
     const physics::StabilityResult r = checkMapStability(
-        estimator_->objects(), &plane, config_.estimator.gravity, config_.physics);
+        estimator_->objects(), &plane, config_.estimator.gravity, config_.estimator.physics);
     py::list bodies;
     for (const physics::BodyMotion& m : r.bodies)
       bodies.append(py::dict(
@@ -190,7 +190,7 @@ class PyEstimator {
   py::dict sceneGraph() const {
     const SupportPlane& plane = estimator_->supportPlane();
     const physics::StabilityResult stability = checkMapStability(
-        estimator_->objects(), &plane, config_.estimator.gravity, config_.physics);
+        estimator_->objects(), &plane, config_.estimator.gravity, config_.estimator.physics);
     const SupportGraph g =
         mapSupportGraph(estimator_->objects(), contacts_, config_.estimator.gravity, &stability,
                         config_.scene_graph);

@@ -866,7 +866,7 @@ geofusion::SceneGraph SceneEstimatorNode::sceneGraphOf(const KeyframeResult& map
                                                        bool check_stability) const {
   physics::StabilityResult stability;
   if (check_stability) {
-    stability = checkMapStability(map.objects, &plane, gravity, config_.physics);
+    stability = checkMapStability(map.objects, &plane, gravity, config_.estimator.physics);
     for (const std::string& w : stability.warnings)
       ROS_WARN_STREAM_THROTTLE(warn_period_s_, "geofusion: scene graph: stability: " << w);
   }
@@ -917,8 +917,8 @@ bool SceneEstimatorNode::onExportScene(geofusion::ExportScene::Request& req,
   for (ObjectEstimate& o : map.objects) o.id = static_cast<int>(messageId(o.id));
   physics::SceneExport exported;
   std::string error;
-  res.success =
-      exportMapScene(map.objects, &plane, gravity, config_.physics, req.folder, &exported, &error);
+  res.success = exportMapScene(map.objects, &plane, gravity, config_.estimator.physics, req.folder,
+                               &exported, &error);
   if (!res.success) {
     res.message = "export_scene: " + error;
     ROS_WARN_STREAM("geofusion: " << res.message);

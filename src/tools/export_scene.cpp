@@ -81,8 +81,8 @@ int main(int argc, char** argv) {
   }
   physics::SceneExport exported;
   const auto& objects = results.final_map.objects;
-  if (!exportMapScene(objects, &results.support_plane, config.estimator.gravity, config.physics,
-                      opt.out, &exported, &error)) {
+  if (!exportMapScene(objects, &results.support_plane, config.estimator.gravity,
+                      config.estimator.physics, opt.out, &exported, &error)) {
     std::cerr << "export_scene: " << error << "\n";
     return 1;
   }
@@ -92,6 +92,6 @@ int main(int argc, char** argv) {
               exported.sdf_path.c_str(), exported.urdf_path.c_str(), exported.mesh_paths.size());
   if (opt.check)
     printCheck(checkMapStability(objects, &results.support_plane, config.estimator.gravity,
-                                 config.physics));
+                                 config.estimator.physics));
   return 0;
 }

@@ -503,7 +503,7 @@ geofusion::physics::StabilityResult checkFinalMap(const geofusion::GeoFusionConf
   const auto start = std::chrono::steady_clock::now();
   physics::StabilityResult s =
       checkMapStability(results->final_map.objects, &results->support_plane,
-                        config.estimator.gravity, config.physics);
+                        config.estimator.gravity, config.estimator.physics);
   results->scene_graph = mapSupportGraph(results->final_map.objects, results->final_map.contacts,
                                          config.estimator.gravity, &s, config.scene_graph);
   results->has_scene_graph = true;
@@ -523,7 +523,7 @@ void printStability(const geofusion::GeoFusionConfig& config, const geofusion::R
   std::printf(
       "run_offline: stability (%.1f s of gravity, checked in %.0f ms): %d of %d objects stable, "
       "%d more start interpenetrating; motion %.1f mm mean, %.1f mm / %.1f deg max",
-      config.physics.duration_s, check_ms, s.stable, s.checked, s.interpenetrating,
+      config.estimator.physics.duration_s, check_ms, s.stable, s.checked, s.interpenetrating,
       1000 * s.mean_translation_m, 1000 * s.max_translation_m, s.max_rotation_deg);
   if (s.least_stable_pair.first != -1) {
     std::printf("; least stable pair %s / %s (%.1f mm)", name(s.least_stable_pair.first).c_str(),

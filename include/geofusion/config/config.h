@@ -89,8 +89,6 @@ struct GeoFusionConfig {
   KeyframeSelectorConfig keyframes;
   EstimatorConfig estimator;
   bool background_enabled = true;
-  /// The stability check (evaluation and the results' summary).
-  physics::StabilityConfig physics;
   /// The support graph as a plan: "over" without a contact (scene_graph.h).
   SupportGraphConfig scene_graph;
   BackgroundMapConfig background;

@@ -17,6 +17,7 @@
 #include "geofusion/estimation/relocalisation.h"
 #include "geofusion/estimation/symmetry_axis.h"
 #include "geofusion/model/object_model.h"
+#include "geofusion/physics/stability.h"
 #include "geofusion/render/consistency.h"
 
 #include <Eigen/Core>
@@ -79,6 +80,9 @@ struct EstimatorConfig {
   SupportPlaneConfig support_plane;
   StageTwoConfig stage_two;
   RelocalisationConfig relocalisation;  ///< GeoFusion: the camera against the map on revisits
+  /// The stability check (YAML section `physics`): the final solve's physical check
+  /// (StageTwoConfig::seating_rounds), the evaluation and the results' summary.
+  physics::StabilityConfig physics;
   Eigen::Vector3d gravity = -Eigen::Vector3d::UnitZ();  ///< in the map (= odom) frame
   double min_detection_score = 0.0;                     ///< detections below are ignored
 };
@@ -319,6 +323,22 @@ class SceneEstimator {
                                 const std::vector<std::size_t>& reported,
                                 const std::vector<FeatureContact>& contacts,
                                 const PosedModel* ground, bool final_solve);
+  /// The relations found over the `local` tracks (`local_contacts`, local indices) as the map's
+  /// contacts, with those kept that the relations could not find again (an end outside the local
+  /// map) between objects that still exist.
+  void setContacts(const std::vector<FeatureContact>& local_contacts,
+                   const std::vector<std::size_t>& local, const std::vector<std::size_t>& reported);
+  /// The final solve's physical check (StageTwoConfig::seating_rounds): the `local` tracks in
+  /// the stability check; those it drops within the bounds get, in the solve's `contacts` (local
+  /// indices, in/out), the contacts found where they came to rest in place of theirs, and stage
+  /// II is solved again (solveStageTwo) with them starting there. False when none was dropped or
+  /// the solve failed (the poses then as before).
+  bool seatDropped(const std::vector<std::size_t>& local, const std::vector<std::size_t>& reported,
+                   const PosedModel* ground, std::vector<FeatureContact>* contacts);
+  /// The carried separations between objects of `index_of_id` (track id -> local index; -1 the
+  /// ground), in local indices.
+  std::vector<Separation> localSeparations(const std::map<int, int>& index_of_id,
+                                           bool has_ground) const;
   void liftOutOfSupport(Track* track) const;
   void keepSeparations(const std::vector<Separation>& separations,
                        const std::vector<Track*>& solved);

@@ -79,6 +79,9 @@ struct BodyMotion {
   int penetrating_id = -1;        ///< the object it starts deepest in (kPlaneId: the plane), or -1
   bool interpenetrating = false;  ///< start_penetration_m above the setting: reported apart
   bool stable = false;            ///< simulated, not interpenetrating, below both bounds
+  /// Where it came to rest: its model frame after the simulated time (the pose given when it
+  /// was not simulated).
+  Eigen::Isometry3d T_world_end = Eigen::Isometry3d::Identity();
 };
 
 constexpr int kPlaneId = -2;
