@@ -896,6 +896,7 @@ void SceneEstimator::setContacts(const std::vector<FeatureContact>& local_contac
 bool SceneEstimator::seatDropped(const std::vector<std::size_t>& local,
                                  const std::vector<std::size_t>& reported, const PosedModel* ground,
                                  std::vector<FeatureContact>* contacts) {
+  if (!ground || !support_.valid) return false;  // no plane: nothing to seat anything on
   const StageTwoConfig& config = config_.stage_two;
   std::vector<Track*> solved;
   std::vector<physics::StabilityBody> bodies;
@@ -905,8 +906,8 @@ bool SceneEstimator::seatDropped(const std::vector<std::size_t>& local,
     solved.push_back(&tr);
   }
   const physics::StabilityPlane plane{support_.normal, support_.height};
-  const physics::StabilityResult check = physics::checkStability(
-      bodies, ground && support_.valid ? &plane : nullptr, config_.gravity, config_.physics);
+  const physics::StabilityResult check =
+      physics::checkStability(bodies, &plane, config_.gravity, config_.physics);
   // Each object where the simulation left it, if it dropped it within the bounds.
   std::vector<PosedModel> rested;
   std::vector<bool> dropped(solved.size(), false);
@@ -917,26 +918,55 @@ bool SceneEstimator::seatDropped(const std::vector<std::size_t>& local,
                  m.rotation_deg < config.seat_max_rotation_deg;
     rested.push_back({solved[i]->model.get(), dropped[i] ? m.T_world_end : solved[i]->T_refined});
   }
+  // The contacts where they came to rest; one that has none there is not seated.
+  const std::vector<FeatureContact> found = restingContacts(&rested, &dropped, solved, ground);
   if (std::none_of(dropped.begin(), dropped.end(), [](bool d) { return d; })) return false;
-  // A dropped object's contacts in the solve: those where it came to rest.
   auto touches_dropped = [&](const FeatureContact& c) {
     return (c.object_a >= 0 && dropped[c.object_a]) || (c.object_b >= 0 && dropped[c.object_b]);
   };
   contacts->erase(std::remove_if(contacts->begin(), contacts->end(), touches_dropped),
                   contacts->end());
-  for (const FeatureContact& c :
-       inferRelations(rested, ground, config_.gravity, config_.contacts, {}))
-    if (touches_dropped(c)) contacts->push_back(c);
+  contacts->insert(contacts->end(), found.begin(), found.end());
   // Stage II again (with its separation rounds), the dropped objects starting where they came
   // to rest: seated on those contacts against their stage I priors, parted from what they reach.
   std::vector<Eigen::Isometry3d> before;
+  const std::vector<Separation> separations_before = separations_by_id_;
   for (std::size_t i = 0; i < solved.size(); ++i) {
     before.push_back(solved[i]->T_refined);
     if (dropped[i]) solved[i]->T_refined = rested[i].T_world_obj;
   }
   if (solveStageTwo(local, reported, *contacts, ground, true).solved) return true;
   for (std::size_t i = 0; i < solved.size(); ++i) solved[i]->T_refined = before[i];
+  separations_by_id_ = separations_before;
   return false;
+}
+
+std::vector<FeatureContact> SceneEstimator::restingContacts(std::vector<PosedModel>* rested,
+                                                            std::vector<bool>* dropped,
+                                                            const std::vector<Track*>& solved,
+                                                            const PosedModel* ground) const {
+  std::vector<FeatureContact> found;
+  for (bool changed = true; changed;) {
+    found.clear();
+    std::vector<bool> touched(solved.size(), false);
+    for (const FeatureContact& c :
+         inferRelations(*rested, ground, config_.gravity, config_.contacts, {})) {
+      const bool a = c.object_a >= 0 && (*dropped)[c.object_a];
+      const bool b = c.object_b >= 0 && (*dropped)[c.object_b];
+      if (!a && !b) continue;
+      found.push_back(c);
+      if (a) touched[c.object_a] = true;
+      if (b) touched[c.object_b] = true;
+    }
+    changed = false;
+    for (std::size_t i = 0; i < solved.size(); ++i) {
+      if (!(*dropped)[i] || touched[i]) continue;
+      (*dropped)[i] = false;  // nothing holds it where it came to rest: left where it was
+      (*rested)[i].T_world_obj = solved[i]->T_refined;
+      changed = true;
+    }
+  }
+  return found;
 }
 
 std::vector<Separation> SceneEstimator::localSeparations(const std::map<int, int>& index_of_id,

@@ -336,7 +336,7 @@ double heightAbove(const ObjectModel& model, const Eigen::Isometry3d& T, double 
 // object standing alone on the table puts it 12 mm higher (no depth refinement to undo it), so
 // the relations find no contact with the table (6 mm, 9 mm for a pair in contact) and stage II
 // leaves it floating. The check drops it, and stage II seats it on the contact found where it
-// came to rest; the objects the check left standing do not move.
+// came to rest; the objects the check left standing stay within a millimetre.
 TEST(SceneEstimator, TheFinalSolveSeatsAnObjectThePhysicsDrops) {
   const Sequence& s = demoSequence();
   int target = -1;  // on the table, touching nothing else, its class once in the scene
@@ -400,13 +400,13 @@ TEST(SceneEstimator, TheFinalSolveSeatsAnObjectThePhysicsDrops) {
   EXPECT_FALSE(check_off.find(floating->id)->stable);
   EXPECT_TRUE(check_on.find(seated->id)->stable);
   EXPECT_GE(check_on.stable, check_off.stable);
-  // What the check left standing was held.
+  // What the check left standing stays (stage II is solved again with the same contacts for it).
   for (const ObjectEstimate& o : off.final.objects) {
     const physics::BodyMotion* m = check_off.find(o.id);
     if (!m || !m->stable) continue;
     for (const ObjectEstimate& p : on.final.objects)
       if (p.id == o.id)
-        EXPECT_LT((p.T_map_obj.translation() - o.T_map_obj.translation()).norm(), 1e-6);
+        EXPECT_LT((p.T_map_obj.translation() - o.T_map_obj.translation()).norm(), 0.001);
   }
 }
 

@@ -218,7 +218,8 @@ struct StageTwoConfig {
   /// something the map lacks) has a support missing or wrong: the relations are found again
   /// with it where it came to rest, those contacts replace its own in stage II, and stage II
   /// seats it (solved again with its separation rounds, the dropped objects starting where they
-  /// came to rest, each held back by its stage I prior); the map's contacts stay as they were.
+  /// came to rest, each held back by its stage I prior); one with no contact there is left as it
+  /// was, and nothing is seated without a support plane. The map's contacts stay as they were.
   /// Then checked again, at most seating_rounds times (0: off; docs/stability.md has the
   /// variants measured).
   int seating_rounds = 1;

@@ -331,10 +331,18 @@ class SceneEstimator {
   /// The final solve's physical check (StageTwoConfig::seating_rounds): the `local` tracks in
   /// the stability check; those it drops within the bounds get, in the solve's `contacts` (local
   /// indices, in/out), the contacts found where they came to rest in place of theirs, and stage
-  /// II is solved again (solveStageTwo) with them starting there. False when none was dropped or
-  /// the solve failed (the poses then as before).
+  /// II is solved again (solveStageTwo) with them starting there. False without a support
+  /// plane, when none was dropped (or none has a contact where it came to rest) or the solve
+  /// failed (the poses and separations then as before).
   bool seatDropped(const std::vector<std::size_t>& local, const std::vector<std::size_t>& reported,
                    const PosedModel* ground, std::vector<FeatureContact>* contacts);
+  /// The contacts (local indices) of the `dropped` objects at their `rested` poses; a dropped
+  /// object without one is taken back (not dropped, its rested pose its refined one) and the
+  /// contacts found again.
+  std::vector<FeatureContact> restingContacts(std::vector<PosedModel>* rested,
+                                              std::vector<bool>* dropped,
+                                              const std::vector<Track*>& solved,
+                                              const PosedModel* ground) const;
   /// The carried separations between objects of `index_of_id` (track id -> local index; -1 the
   /// ground), in local indices.
   std::vector<Separation> localSeparations(const std::map<int, int>& index_of_id,
