@@ -5,6 +5,7 @@ extern "C" {
 }
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <assimp/Exporter.hpp>
 #include <assimp/Importer.hpp>
@@ -377,9 +378,31 @@ bool qhullTriangles(const std::vector<Eigen::Vector3f>& points,
 
 }  // namespace
 
+namespace {
+
+/// Whether the points span a volume: a flat, collinear or coincident set has no 3-D hull, and
+/// qhull, given one, prints an internal error (QH6421 or QH6154) on stderr before failing.
+bool spansAVolume(const std::vector<Eigen::Vector3f>& points) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3f& p : points) mean += p.cast<double>();
+  mean /= static_cast<double>(points.size());
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (const Eigen::Vector3f& p : points) {
+    const Eigen::Vector3d d = p.cast<double>() - mean;
+    covariance += d * d.transpose();
+  }
+  if (!covariance.allFinite()) return false;
+  const Eigen::Vector3d spread =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance, Eigen::EigenvaluesOnly)
+          .eigenvalues();  // ascending
+  return spread[2] > 0.0 && spread[0] > 1e-12 * spread[2];
+}
+
+}  // namespace
+
 TriangleMesh convexHull(const std::vector<Eigen::Vector3f>& points) {
   TriangleMesh out;
-  if (points.size() < 4) return out;
+  if (points.size() < 4 || !spansAVolume(points)) return out;
   std::vector<std::array<int, 3>> facets;
   if (!qhullTriangles(points, &out.vertices, &facets) || out.vertices.size() < 4 || facets.empty())
     return TriangleMesh();

@@ -229,4 +229,24 @@ TEST(CollisionHull, YcbHullsAreBoundedAndKeepTheShape) {
 }
 
 }  // namespace
+// A flat, collinear or coincident point set has no hull: empty, and nothing from qhull on stderr
+// (a table of zero thickness made it print "QH6421 qhull internal error" in evaluate_run).
+TEST(ConvexHull, APointSetWithoutVolumeGivesNoHullQuietly) {
+  const std::vector<Eigen::Vector3f> flat = {
+      {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {0.5f, 0.5f, 0}};
+  const std::vector<Eigen::Vector3f> line = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0}};
+  const std::vector<Eigen::Vector3f> point(8, Eigen::Vector3f(0.2f, 0.3f, 0.75f));
+  for (const auto* points : {&flat, &line, &point}) {
+    testing::internal::CaptureStderr();
+    const TriangleMesh hull = convexHull(*points);
+    const std::string printed = testing::internal::GetCapturedStderr();
+    EXPECT_TRUE(hull.empty());
+    EXPECT_EQ(printed.find("qhull"), std::string::npos) << printed;
+  }
+  // A box still has its hull: 8 corners, 12 triangles.
+  const TriangleMesh box = convexHull(makeBox(Eigen::Vector3d(0.1, 0.2, 0.3)).vertices);
+  EXPECT_EQ(box.vertices.size(), 8u);
+  EXPECT_EQ(box.triangles.size(), 12u);
+}
+
 }  // namespace geofusion
