@@ -46,7 +46,9 @@ class OverloadTest(unittest.TestCase):
         self.assertTrue(util.wait_for_graph(util.INPUT_TOPICS, [NS + '/object_map']),
                         'the estimator did not come up')
         time.sleep(1.0)
-        util.play(bag, rate=util.throughput_rate(20.0))
+        # 20x whatever the build: a slower (instrumented) estimator only falls further behind,
+        # and dividing the rate as the keep-up tests do let ASan's keep up (no overflow, 2026-12-07).
+        util.play(bag, rate=20.0)
         time.sleep(3.0)  # the last frames processed, then a diagnostics message (1 Hz)
         with self.lock:
             values, maps = dict(self.values or {}), self.maps
