@@ -918,9 +918,13 @@ bool SceneEstimator::seatDropped(const std::vector<std::size_t>& local,
                  m.rotation_deg < config.seat_max_rotation_deg;
     rested.push_back({solved[i]->model.get(), dropped[i] ? m.T_world_end : solved[i]->T_refined});
   }
+  auto none_dropped = [&dropped] {
+    return std::none_of(dropped.begin(), dropped.end(), [](bool d) { return d; });
+  };
+  if (none_dropped()) return false;  // everything stands: no relations to look for
   // The contacts where they came to rest; one that has none there is not seated.
   const std::vector<FeatureContact> found = restingContacts(&rested, &dropped, solved, ground);
-  if (std::none_of(dropped.begin(), dropped.end(), [](bool d) { return d; })) return false;
+  if (none_dropped()) return false;
   auto touches_dropped = [&](const FeatureContact& c) {
     return (c.object_a >= 0 && dropped[c.object_a]) || (c.object_b >= 0 && dropped[c.object_b]);
   };

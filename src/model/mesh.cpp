@@ -378,19 +378,22 @@ bool qhullTriangles(const std::vector<Eigen::Vector3f>& points,
 
 }  // namespace
 
+Eigen::Matrix3d scatterMatrix(const std::vector<Eigen::Vector3f>& points) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3f& p : points) mean += p.cast<double>();
+  mean /= static_cast<double>(points.size());
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const Eigen::Vector3f& p : points)
+    scatter += (p.cast<double>() - mean) * (p.cast<double>() - mean).transpose();
+  return scatter;
+}
+
 namespace {
 
 /// Whether the points span a volume: a flat, collinear or coincident set has no 3-D hull, and
 /// qhull, given one, prints an internal error (QH6421 or QH6154) on stderr before failing.
 bool spansAVolume(const std::vector<Eigen::Vector3f>& points) {
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (const Eigen::Vector3f& p : points) mean += p.cast<double>();
-  mean /= static_cast<double>(points.size());
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-  for (const Eigen::Vector3f& p : points) {
-    const Eigen::Vector3d d = p.cast<double>() - mean;
-    covariance += d * d.transpose();
-  }
+  const Eigen::Matrix3d covariance = scatterMatrix(points);
   if (!covariance.allFinite()) return false;
   const Eigen::Vector3d spread =
       Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance, Eigen::EigenvaluesOnly)

@@ -180,13 +180,7 @@ class SurfaceDistance {
 std::vector<Eigen::Vector3d> candidateAxes(const std::vector<Eigen::Vector3f>& points) {
   std::vector<Eigen::Vector3d> axes{Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(),
                                     Eigen::Vector3d::UnitZ()};
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (const auto& p : points) mean += p.cast<double>();
-  mean /= static_cast<double>(points.size());
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (const auto& p : points)
-    cov += (p.cast<double>() - mean) * (p.cast<double>() - mean).transpose();
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatterMatrix(points));
   const Eigen::Vector3d values = eig.eigenvalues();
   for (int i = 0; i < 3; ++i) {
     bool distinct = true;

@@ -50,6 +50,10 @@ TriangleMesh simplifyMesh(const TriangleMesh& mesh, std::size_t target_triangles
 /// Volume enclosed by a closed mesh with outward triangles (a convex hull's), m^3.
 double enclosedVolume(const TriangleMesh& mesh);
 
+/// The points' scatter matrix about their mean (sum of (p - mean)(p - mean)^T), in double: its
+/// eigenvectors are their principal axes, its eigenvalues the spread along them.
+Eigen::Matrix3d scatterMatrix(const std::vector<Eigen::Vector3f>& points);
+
 /// Convex hull of the points (qhull through PCL), triangles counter-clockwise seen from outside.
 /// Empty for fewer than 4 points or degenerate (flat) input.
 TriangleMesh convexHull(const std::vector<Eigen::Vector3f>& points);
