@@ -525,6 +525,14 @@ class Table {
          [f](GeoFusionConfig& c) { return &f(c)->separation_margin_m; });
     real("stage_two.separation_sigma_m", 1e-6, 0.1, "sigma of the separation factors, m",
          [f](GeoFusionConfig& c) { return &f(c)->separation_sigma_m; });
+    flag("stage_two.separation_drop_stale",
+         "a separation carried from an earlier keyframe is dropped once the pair's stage I poses "
+         "no longer interpenetrate",
+         [f](GeoFusionConfig& c) { return &f(c)->separation_drop_stale; });
+    real("stage_two.separation_hull_max_depth_m", 0, 0.05,
+         "the final solve parts pairs whose hulls (the physical check's bodies) interpenetrate "
+         "at most this deep as hulls, deeper ones by their convex parts, m (0: parts only)",
+         [f](GeoFusionConfig& c) { return &f(c)->separation_hull_max_depth_m; });
     integer("stage_two.seating_rounds", 0, 10,
             "the final solve checks the map in physics; objects it drops are seated by stage II "
             "on the contacts found where they came to rest, at most this often (0: off; "

@@ -974,17 +974,29 @@ std::vector<FeatureContact> SceneEstimator::restingContacts(std::vector<PosedMod
 }
 
 std::vector<Separation> SceneEstimator::localSeparations(const std::map<int, int>& index_of_id,
+                                                         const std::vector<Track*>& solved,
                                                          bool has_ground) const {
+  const StageTwoConfig& config = config_.stage_two;
   std::vector<Separation> separations;  // local indices
   for (Separation s : separations_by_id_) {
     const auto a = index_of_id.find(s.object_a), b = index_of_id.find(s.object_b);
-    if (config_.stage_two.separation_rounds == 0 || a == index_of_id.end() ||
-        b == index_of_id.end() || (s.object_a < 0 && !has_ground))
+    if (config.separation_rounds == 0 || a == index_of_id.end() || b == index_of_id.end() ||
+        (s.object_a < 0 && !has_ground))
       continue;
     s.object_a = a->second, s.object_b = b->second;
+    if (config.separation_drop_stale && !stageOneOverlaps(s, solved)) continue;
     separations.push_back(s);
   }
   return separations;
+}
+
+bool SceneEstimator::stageOneOverlaps(const Separation& s,
+                                      const std::vector<Track*>& solved) const {
+  const Track& b = *solved[static_cast<std::size_t>(s.object_b)];
+  const double min_depth = config_.stage_two.separation_min_depth_m;
+  if (s.object_a < 0) return depthThroughPlane(support_, *b.model, b.T_stage_one) > min_depth;
+  const Track& a = *solved[static_cast<std::size_t>(s.object_a)];
+  return collider_->partsPenetration(a.model, a.T_stage_one, b.model, b.T_stage_one) > min_depth;
 }
 
 namespace {
@@ -1036,16 +1048,17 @@ StageTwoSummary SceneEstimator::solveStageTwo(const std::vector<std::size_t>& lo
     solved.push_back(&tr);
   }
   const StageTwoConfig& config = config_.stage_two;
-  std::vector<Separation> separations = localSeparations(index_of_id, ground != nullptr);
+  std::vector<Separation> separations = localSeparations(index_of_id, solved, ground != nullptr);
   StageTwoSummary s;
   std::vector<bool> held;  // the first solve: every object
   for (int round = 0; round <= config.separation_rounds; ++round) {
     if (round > 0) {  // what still interpenetrates parts, and its part of the scene is re-solved
       std::vector<CollisionBody> bodies;
       for (const Track* tr : solved) bodies.push_back({tr->model, tr->T_refined});
-      const std::vector<Separation> found =
-          findInterpenetrations(bodies, ground ? &support_ : nullptr, T_map_support_,
-                                config.separation_min_depth_m, collider_.get(), final_solve);
+      const std::vector<Separation> found = findInterpenetrations(
+          bodies, ground ? &support_ : nullptr, T_map_support_, config.separation_min_depth_m,
+          collider_.get(), final_solve,
+          final_solve && !config_.physics.convex_parts ? config.separation_hull_max_depth_m : 0.0);
       if (found.empty()) break;
       separations.insert(separations.end(), found.begin(), found.end());
       held = heldOutside(found, contacts, solved.size());

@@ -29,7 +29,7 @@ std::vector<Separation> findInterpenetrations(const std::vector<CollisionBody>& 
                                               const SupportPlane* plane,
                                               const Eigen::Isometry3d& T_world_ground,
                                               double min_depth_m, HullCollider* collider,
-                                              bool same_class_pairs) {
+                                              bool same_class_pairs, double hull_max_depth_m) {
   std::vector<Separation> out;
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     const CollisionBody& A = bodies[i];
@@ -44,7 +44,11 @@ std::vector<Separation> findInterpenetrations(const std::vector<CollisionBody>& 
       if (!B.model || (!same_class_pairs && B.model->name == A.model->name)) continue;
       const double apart = (A.T_world_obj.translation() - B.T_world_obj.translation()).norm();
       if (apart > collider->reach(A.model) + collider->reach(B.model)) continue;
-      const HullContact c = collider->partsContact(A.model, A.T_world_obj, B.model, B.T_world_obj);
+      HullContact c;
+      if (hull_max_depth_m > 0.0)
+        c = collider->hullContact(A.model, A.T_world_obj, B.model, B.T_world_obj);
+      if (hull_max_depth_m <= 0.0 || c.depth > hull_max_depth_m)
+        c = collider->partsContact(A.model, A.T_world_obj, B.model, B.T_world_obj);
       if (c.depth <= min_depth_m) continue;
       s.object_a = static_cast<int>(i), s.object_b = static_cast<int>(j);
       s.p_a = A.T_world_obj.inverse() * c.point;

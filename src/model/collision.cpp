@@ -6,6 +6,9 @@
 #include <fcl/narrowphase/collision.h>
 #include <fcl/narrowphase/distance.h>
 
+#include <BulletCollision/CollisionShapes/btConvexHullShape.h>
+#include <BulletCollision/NarrowPhaseCollision/btGjkEpa2.h>
+
 #include <algorithm>
 #include <map>
 
@@ -67,21 +70,61 @@ double fclDistance(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b) {
   return std::max(0.0, result.min_distance);
 }
 
+namespace {
+
+btTransform btPose(const Eigen::Isometry3d& T) {
+  const Eigen::Quaterniond q(T.linear());
+  const Eigen::Vector3d& t = T.translation();
+  return btTransform(btQuaternion(q.x(), q.y(), q.z(), q.w()), btVector3(t.x(), t.y(), t.z()));
+}
+
+std::shared_ptr<btConvexHullShape> btConvex(const TriangleMesh& hull) {
+  auto shape = std::make_shared<btConvexHullShape>();
+  for (const auto& v : hull.vertices) shape->addPoint(btVector3(v.x(), v.y(), v.z()), false);
+  shape->recalcLocalAabb();
+  shape->setMargin(0.0);  // the hull itself, not Bullet's rounded shell around it
+  return shape;
+}
+
+// The penetration of two posed convex shapes: Bullet's GJK and EPA, the smallest translation
+// that parts them (FCL's libccd path gives MPR's depth along the line of the centres, deeper by
+// up to centimetres: docs/stability.md). Bullet gives the normal in a's frame and from b to a.
+HullContact bulletContact(const btConvexShape& a, const Eigen::Isometry3d& T_world_a,
+                          const btConvexShape& b, const Eigen::Isometry3d& T_world_b) {
+  const btTransform Ta = btPose(T_world_a), Tb = btPose(T_world_b);
+  btVector3 guess = Tb.getOrigin() - Ta.getOrigin();
+  if (guess.fuzzyZero()) guess = btVector3(0, 0, 1);
+  btGjkEpaSolver2::sResults r;
+  if (!btGjkEpaSolver2::Penetration(&a, Ta, &b, Tb, guess, r) || r.distance >= 0) return {};
+  HullContact out;
+  out.depth = -r.distance;
+  const btVector3 n = -(Ta.getBasis() * r.normal);
+  out.normal = Eigen::Vector3d(n.x(), n.y(), n.z()).normalized();
+  const btVector3 mid = 0.5 * (r.witnesses[0] + r.witnesses[1]);
+  out.point = Eigen::Vector3d(mid.x(), mid.y(), mid.z());
+  return out;
+}
+
+}  // namespace
+
 struct HullCollider::Impl {
   struct Part {
-    std::shared_ptr<fcl::CollisionGeometryd> shape;
+    std::shared_ptr<btConvexHullShape> shape;
     Eigen::Vector3d centre;  ///< of the part's bounding sphere, model frame
     double radius = 0.0;
   };
-  std::map<std::shared_ptr<const ObjectModel>, std::shared_ptr<fcl::CollisionGeometryd>> hulls;
+  struct Hull {
+    std::shared_ptr<fcl::CollisionGeometryd> fcl;  ///< for distances
+    std::shared_ptr<btConvexHullShape> bullet;     ///< for penetrations
+  };
+  std::map<std::shared_ptr<const ObjectModel>, Hull> hulls;
   std::map<std::shared_ptr<const ObjectModel>, std::vector<Part>> parts;
   std::map<std::shared_ptr<const ObjectModel>, double> reach;
-  std::shared_ptr<fcl::CollisionGeometryd> hull(const std::shared_ptr<const ObjectModel>& m) {
+  const Hull& hull(const std::shared_ptr<const ObjectModel>& m) {
     auto it = hulls.find(m);
     if (it != hulls.end()) return it->second;
-    auto g = fclHull(*m);
-    hulls[m] = g;
-    return g;
+    const TriangleMesh mesh = collisionHullOf(*m);
+    return hulls[m] = Hull{fclConvex(mesh), btConvex(mesh)};
   }
   // The model's convex parts; a model with one part (or none made) has its hull, the same FCL
   // shape penetration() uses.
@@ -98,14 +141,14 @@ struct HullCollider::Impl {
     };
     if (m->collision_parts.size() <= 1) {
       Part p;
-      p.shape = hull(m);
+      p.shape = hull(m).bullet;
       sphere(collisionHullOf(*m), &p);
       out.push_back(p);
       return out;
     }
     for (const TriangleMesh& mesh : m->collision_parts) {
       Part p;
-      p.shape = fclConvex(mesh);
+      p.shape = btConvex(mesh);
       sphere(mesh, &p);
       out.push_back(p);
     }
@@ -122,26 +165,19 @@ void HullCollider::prepare(const std::shared_ptr<const ObjectModel>& model) {
   impl_->partsOf(model);
 }
 
-namespace {
-
-// `query` (penetration or distance) of the two models' hulls at their poses; 0 for a null model.
-template <typename Impl, typename Query>
-double onHulls(Impl* impl, const std::shared_ptr<const ObjectModel>& a,
-               const Eigen::Isometry3d& T_world_a, const std::shared_ptr<const ObjectModel>& b,
-               const Eigen::Isometry3d& T_world_b, Query query) {
-  if (!a || !b) return 0.0;
-  fcl::CollisionObjectd oa(impl->hull(a), fcl::Transform3d(T_world_a.matrix()));
-  fcl::CollisionObjectd ob(impl->hull(b), fcl::Transform3d(T_world_b.matrix()));
-  return query(&oa, &ob);
-}
-
-}  // namespace
-
 double HullCollider::penetration(const std::shared_ptr<const ObjectModel>& a,
                                  const Eigen::Isometry3d& T_world_a,
                                  const std::shared_ptr<const ObjectModel>& b,
                                  const Eigen::Isometry3d& T_world_b) {
-  return onHulls(impl_.get(), a, T_world_a, b, T_world_b, fclPenetration);
+  return hullContact(a, T_world_a, b, T_world_b).depth;
+}
+
+HullContact HullCollider::hullContact(const std::shared_ptr<const ObjectModel>& a,
+                                      const Eigen::Isometry3d& T_world_a,
+                                      const std::shared_ptr<const ObjectModel>& b,
+                                      const Eigen::Isometry3d& T_world_b) {
+  if (!a || !b) return {};
+  return bulletContact(*impl_->hull(a).bullet, T_world_a, *impl_->hull(b).bullet, T_world_b);
 }
 
 double HullCollider::reach(const std::shared_ptr<const ObjectModel>& model) {
@@ -166,14 +202,12 @@ HullContact HullCollider::partsContact(const std::shared_ptr<const ObjectModel>&
                                        const std::shared_ptr<const ObjectModel>& b,
                                        const Eigen::Isometry3d& T_world_b) {
   if (!a || !b) return {};
-  const fcl::Transform3d Ta(T_world_a.matrix()), Tb(T_world_b.matrix());
   HullContact deepest;
   for (const Impl::Part& pa : impl_->partsOf(a)) {
     const Eigen::Vector3d ca = T_world_a * pa.centre;
     for (const Impl::Part& pb : impl_->partsOf(b)) {
       if ((ca - T_world_b * pb.centre).norm() > pa.radius + pb.radius) continue;  // apart
-      fcl::CollisionObjectd oa(pa.shape, Ta), ob(pb.shape, Tb);
-      const HullContact c = fclContact(&oa, &ob);
+      const HullContact c = bulletContact(*pa.shape, T_world_a, *pb.shape, T_world_b);
       if (c.depth > deepest.depth) deepest = c;
     }
   }
@@ -184,7 +218,10 @@ double HullCollider::distance(const std::shared_ptr<const ObjectModel>& a,
                               const Eigen::Isometry3d& T_world_a,
                               const std::shared_ptr<const ObjectModel>& b,
                               const Eigen::Isometry3d& T_world_b) {
-  return onHulls(impl_.get(), a, T_world_a, b, T_world_b, fclDistance);
+  if (!a || !b) return 0.0;
+  fcl::CollisionObjectd oa(impl_->hull(a).fcl, fcl::Transform3d(T_world_a.matrix()));
+  fcl::CollisionObjectd ob(impl_->hull(b).fcl, fcl::Transform3d(T_world_b.matrix()));
+  return fclDistance(&oa, &ob);
 }
 
 }  // namespace geofusion

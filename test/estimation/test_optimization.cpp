@@ -385,6 +385,50 @@ TEST(StageTwo, SeparationFactorsPartInterpenetratingEstimates) {
   EXPECT_NEAR(collider.penetration(box, poses[0], other, poses[1]), 0.006, 5e-4);
 }
 
+// An L of two convex parts and a cube by its inner corner: the cube lies 2 mm inside the L's hull
+// (which spans the corner) and clear of both arms. The physical check's bodies are the hulls,
+// so the final solve parts so shallow a hull contact as hulls; a cube deep in the corner is in
+// the L's hollow, not in the L, and only parts would part it (nothing here).
+TEST(StageTwo, ShallowHullContactsArePartedAsHulls) {
+  auto ell = std::make_shared<ObjectModel>();
+  ell->name = "ell";
+  auto arm = [](const Eigen::Vector3d& size, const Eigen::Vector3d& centre) {
+    TriangleMesh m = makeBox(size);
+    for (auto& v : m.vertices) v += centre.cast<float>();
+    return m;
+  };
+  ell->collision_parts = {arm({0.2, 0.04, 0.04}, {0, 0, 0}),
+                          arm({0.04, 0.2, 0.04}, {-0.08, 0.08, 0})};
+  for (const TriangleMesh& part : ell->collision_parts) {
+    const int offset = static_cast<int>(ell->mesh.vertices.size());
+    ell->mesh.vertices.insert(ell->mesh.vertices.end(), part.vertices.begin(), part.vertices.end());
+    for (Eigen::Vector3i t : part.triangles) ell->mesh.triangles.push_back(t.array() + offset);
+  }
+  const auto cube = std::make_shared<ObjectModel>(boxModel(0.03, 0.03, 0.03));
+  // The hull's face over the corner: x + y = 0.12 (from the arms' ends (0.1, 0.02), (-0.06, 0.18)).
+  auto cubeInside = [](double depth) {
+    const double c = 0.5 * (0.15 - depth * std::sqrt(2.0));  // the cube's corner `depth` inside
+    return at(c, c, 0.0);
+  };
+  HullCollider collider;
+  for (double depth : {0.002, 0.010}) {
+    SCOPED_TRACE(depth);
+    const std::vector<CollisionBody> bodies = {{ell, at(0, 0, 0)}, {cube, cubeInside(depth)}};
+    EXPECT_NEAR(collider.penetration(ell, at(0, 0, 0), cube, cubeInside(depth)), depth, 2e-4);
+    EXPECT_EQ(collider.partsPenetration(ell, at(0, 0, 0), cube, cubeInside(depth)), 0.0);
+    EXPECT_TRUE(findInterpenetrations(bodies, nullptr, at(0, 0, 0), 0.0005, &collider).empty());
+    const std::vector<Separation> as_hulls =
+        findInterpenetrations(bodies, nullptr, at(0, 0, 0), 0.0005, &collider, true, 0.003);
+    if (depth > 0.003) {
+      EXPECT_TRUE(as_hulls.empty());
+      continue;
+    }
+    ASSERT_EQ(as_hulls.size(), 1u);
+    EXPECT_NEAR(as_hulls[0].depth, depth, 2e-4);
+    EXPECT_GT(as_hulls[0].normal.dot(Eigen::Vector3d(1, 1, 0).normalized()), 0.99);  // out of the L
+  }
+}
+
 TEST(StageTwo, CanLyingOnABoxTouchesIt) {
   const Ground ground;
   const ObjectModel box = boxModel(0.2, 0.2, 0.1);

@@ -202,7 +202,8 @@ struct StageTwoConfig {
   /// keyframe. The final solve of a run (finish) takes every object.
   int local_map_keyframes = 60;
   /// Issue 50: nothing interpenetrates. After the solve, estimates whose shapes (convex
-  /// parts) interpenetrate deeper than separation_min_depth_m (FCL; the support plane: the hull)
+  /// parts) interpenetrate deeper than separation_min_depth_m (HullCollider; the support plane:
+  /// the hull)
   /// get a separation factor (factors/separation_factor.h: part along the contact normal by the
   /// depth plus separation_margin_m, weight 1 / separation_sigma_m) and stage II is solved again
   /// with them, up to separation_rounds times (0: off).
@@ -210,6 +211,14 @@ struct StageTwoConfig {
   double separation_min_depth_m = 0.0005;
   double separation_margin_m = 0.0003;
   double separation_sigma_m = 0.0001;
+  /// A separation carried from an earlier keyframe is dropped once the pair's stage I poses no
+  /// longer interpenetrate (deeper than separation_min_depth_m): it was made for estimates
+  /// since corrected, and would hold them off their measurements (docs/stability.md).
+  bool separation_drop_stale = true;
+  /// The final solve parts a pair whose hulls (the physical check's bodies) interpenetrate at
+  /// most this deep as hulls; deeper, by their convex parts (a hull that deep spans a hollow the
+  /// other object lies in). 0: convex parts only. Not when physics.convex_parts.
+  double separation_hull_max_depth_m = 0.003;
   /// Issue 50, the paper's "physical relationship check": the final solve (finish(): the map a
   /// run ends with, a map saved with its final solve) puts the map into the stability check
   /// (EstimatorConfig::physics). An object the simulation drops (not interpenetrating at the

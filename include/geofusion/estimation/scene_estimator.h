@@ -343,10 +343,13 @@ class SceneEstimator {
                                               std::vector<bool>* dropped,
                                               const std::vector<Track*>& solved,
                                               const PosedModel* ground) const;
-  /// The carried separations between objects of `index_of_id` (track id -> local index; -1 the
-  /// ground), in local indices.
+  /// The carried separations between objects of `index_of_id` (track id -> local index into
+  /// `solved`; -1 the ground), in local indices; with separation_drop_stale, only those whose
+  /// pair still interpenetrates at its stage I poses.
   std::vector<Separation> localSeparations(const std::map<int, int>& index_of_id,
+                                           const std::vector<Track*>& solved,
                                            bool has_ground) const;
+  bool stageOneOverlaps(const Separation& s, const std::vector<Track*>& solved) const;
   void liftOutOfSupport(Track* track) const;
   void keepSeparations(const std::vector<Separation>& separations,
                        const std::vector<Track*>& solved);

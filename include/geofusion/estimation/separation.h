@@ -1,6 +1,6 @@
-// Issue 50: estimates that interpenetrate after stage II. FCL (model/collision.h) on the objects'
-// convex parts, and each hull's lowest point against the support plane; the result feeds stage
-// II's separation factors (optimization.h, Separation).
+// Issue 50: estimates that interpenetrate after stage II. HullCollider (model/collision.h) on
+// the objects' convex parts, and each hull's lowest point against the support plane; the result
+// feeds stage II's separation factors (optimization.h, Separation).
 #pragma once
 
 #include "geofusion/estimation/optimization.h"
@@ -28,11 +28,13 @@ struct CollisionBody {
 /// final solve, after the last merge, parts them too), deeper than `min_depth_m`
 /// (object indices into `bodies`), and every body deeper than that through a valid `plane` within
 /// its extent (object_a -1; p_a in the frame `T_world_ground` of stage II's ground block), as
-/// separations.
+/// separations. A pair whose hulls interpenetrate at most `hull_max_depth_m` is parted as hulls
+/// (the stability check's bodies) instead of parts; deeper, as parts (0: always as parts).
 std::vector<Separation> findInterpenetrations(const std::vector<CollisionBody>& bodies,
                                               const SupportPlane* plane,
                                               const Eigen::Isometry3d& T_world_ground,
                                               double min_depth_m, HullCollider* collider,
-                                              bool same_class_pairs = false);
+                                              bool same_class_pairs = false,
+                                              double hull_max_depth_m = 0.0);
 
 }  // namespace geofusion

@@ -1,4 +1,4 @@
-// Collision geometry of the models: each model's convex collision hull (FCL) and the queries the
+// Collision geometry of the models: each model's convex collision hull and the queries the
 // estimator (stage II's interpenetration check) and the simulation (settling scenes, ground-truth
 // contacts) share.
 #pragma once
@@ -17,7 +17,8 @@ struct ObjectModel;
 /// built by hand.
 TriangleMesh collisionHullOf(const ObjectModel& model);
 
-/// Where two posed hulls interpenetrate (FCL's contact): `depth` (0 when apart), the world
+/// Where two posed hulls interpenetrate: `depth` (0 when apart; the smallest translation that
+/// parts them), the world
 /// `normal` along which b leaves a (from a to b), and the contact `point` in the world.
 struct HullContact {
   double depth = 0.0;
@@ -25,8 +26,10 @@ struct HullContact {
   Eigen::Vector3d point = Eigen::Vector3d::Zero();
 };
 
-/// FCL: interpenetration depth of two posed models' convex collision hulls (0 when apart).
-/// Keeps each model's FCL geometry (keyed by the model, which it keeps alive) for repeated use.
+/// Interpenetration depth of two posed models' convex collision hulls (0 when apart): Bullet's
+/// GJK-EPA; distances: FCL (libccd's GJK). FCL's own penetration (libccd's MPR, along the line of
+/// the centres) overstates it by up to centimetres (docs/stability.md). Keeps each model's shapes
+/// (keyed by the model, which it keeps alive) for repeated use.
 class HullCollider {
  public:
   HullCollider();
@@ -46,10 +49,15 @@ class HullCollider {
                            const Eigen::Isometry3d& T_world_a,
                            const std::shared_ptr<const ObjectModel>& b,
                            const Eigen::Isometry3d& T_world_b);
+  /// The contact of the two models' convex hulls (as penetration()).
+  HullContact hullContact(const std::shared_ptr<const ObjectModel>& a,
+                          const Eigen::Isometry3d& T_world_a,
+                          const std::shared_ptr<const ObjectModel>& b,
+                          const Eigen::Isometry3d& T_world_b);
   /// The radius of the model hull's bounding sphere about the model frame's origin (a cheap
   /// test before contact()).
   double reach(const std::shared_ptr<const ObjectModel>& model);
-  /// Builds the model's FCL hull and parts now (at start, not at the first contact check).
+  /// Builds the model's hull and parts shapes now (at start, not at the first contact check).
   void prepare(const std::shared_ptr<const ObjectModel>& model);
   /// Distance between the two hulls, 0 when they touch or intersect.
   double distance(const std::shared_ptr<const ObjectModel>& a, const Eigen::Isometry3d& T_world_a,

@@ -15,7 +15,10 @@ namespace geofusion {
 /// The model's collision hull (collisionHullOf) as an FCL convex shape.
 std::shared_ptr<fcl::CollisionGeometryd> fclHull(const ObjectModel& model);
 
-/// Deepest penetration of the two objects' contacts (libccd GJK/EPA), 0 when they do not collide.
+/// Deepest penetration of the two objects' contacts (libccd's MPR: the depth along the line of
+/// the centres, an upper bound of the smallest parting translation HullCollider gives; the
+/// generator's settled-scene check keeps it so that its scenes stay as they were made), 0 when
+/// they do not collide.
 double fclPenetration(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b);
 
 /// Distance between the two objects, 0 when they touch or intersect.
