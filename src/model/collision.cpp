@@ -10,6 +10,8 @@
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpa2.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <map>
 
 namespace geofusion {
@@ -86,23 +88,51 @@ std::shared_ptr<btConvexHullShape> btConvex(const TriangleMesh& hull) {
   return shape;
 }
 
-// The penetration of two posed convex shapes: Bullet's GJK and EPA, the smallest translation
-// that parts them (FCL's libccd path gives MPR's depth along the line of the centres, deeper by
-// up to centimetres: docs/stability.md). Bullet gives the normal in a's frame and from b to a.
+// How far b must move along the world direction `n` to leave a: their supports' overlap along
+// `n`. A parting translation for any direction; the penetration depth for the best one.
+double overlapAlong(const btConvexShape& a, const btTransform& Ta, const btConvexShape& b,
+                    const btTransform& Tb, const btVector3& n) {
+  const btVector3 on_a = Ta * a.localGetSupportingVertexWithoutMargin(n * Ta.getBasis());
+  const btVector3 on_b = Tb * b.localGetSupportingVertexWithoutMargin(-n * Tb.getBasis());
+  return n.dot(on_a) - n.dot(on_b);
+}
+
+// The penetration of two posed convex shapes: the smallest translation that parts them, found by
+// Bullet's GJK and EPA (FCL's libccd path gives MPR's depth along the line of the centres, deeper
+// by up to centimetres: docs/stability.md). EPA can stop on a wrong face from a degenerate start
+// (two boxes side by side, faces coplanar, the first direction along their centres: 2.2 mm for
+// 5): each answer is checked against the supports along its normal and, when they disagree,
+// EPA starts again from other directions; the depth is the supports' overlap along the best
+// normal found, so never less than the true depth. Bullet gives the normal in a's frame and
+// from b to a; here it is in the world and from a to b.
 HullContact bulletContact(const btConvexShape& a, const Eigen::Isometry3d& T_world_a,
                           const btConvexShape& b, const Eigen::Isometry3d& T_world_b) {
   const btTransform Ta = btPose(T_world_a), Tb = btPose(T_world_b);
-  btVector3 guess = Tb.getOrigin() - Ta.getOrigin();
-  if (guess.fuzzyZero()) guess = btVector3(0, 0, 1);
-  btGjkEpaSolver2::sResults r;
-  if (!btGjkEpaSolver2::Penetration(&a, Ta, &b, Tb, guess, r) || r.distance >= 0) return {};
-  HullContact out;
-  out.depth = -r.distance;
-  const btVector3 n = -(Ta.getBasis() * r.normal);
-  out.normal = Eigen::Vector3d(n.x(), n.y(), n.z()).normalized();
-  const btVector3 mid = 0.5 * (r.witnesses[0] + r.witnesses[1]);
-  out.point = Eigen::Vector3d(mid.x(), mid.y(), mid.z());
-  return out;
+  const btVector3 centres = Tb.getOrigin() - Ta.getOrigin();
+  const btVector3 starts[] = {centres.fuzzyZero() ? btVector3(0, 0, 1) : centres,
+                              btVector3(0, 0, 1), btVector3(1, 0, 0), btVector3(0, 1, 0)};
+  constexpr double kAgree = 2e-4;  // m: EPA's accuracy in single precision and then some
+  HullContact best;
+  best.depth = std::numeric_limits<double>::infinity();
+  for (const btVector3& start : starts) {
+    btGjkEpaSolver2::sResults r;
+    if (!btGjkEpaSolver2::Penetration(&a, Ta, &b, Tb, start, r)) {
+      if (r.status == btGjkEpaSolver2::sResults::Separated) return {};
+      continue;  // GJK or EPA failed from this start
+    }
+    if (r.distance >= 0) return {};
+    const btVector3 n = -(Ta.getBasis() * r.normal).normalized();
+    const double parting = overlapAlong(a, Ta, b, Tb, n);
+    if (parting < best.depth) {
+      const btVector3 mid = 0.5 * (r.witnesses[0] + r.witnesses[1]);
+      best.depth = parting;
+      best.normal = Eigen::Vector3d(n.x(), n.y(), n.z());
+      best.point = Eigen::Vector3d(mid.x(), mid.y(), mid.z());
+    }
+    if (parting <= -r.distance + kAgree) break;  // EPA's face is the supports' own
+  }
+  if (!(best.depth > 0.0) || !std::isfinite(best.depth)) return {};
+  return best;
 }
 
 }  // namespace

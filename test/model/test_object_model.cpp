@@ -288,6 +288,14 @@ TEST(HullCollider, PenetrationIsTheSmallestTranslationThatParts) {
   EXPECT_EQ(collider.penetration(box, T_box, bar, out), 0.0);
   EXPECT_GT(collider.distance(box, T_box, bar, out), 1e-4);
   EXPECT_GT(collider.penetration(box, T_box, bar, in), c.depth + 0.001);
+  // Two boxes side by side, 5 mm into each other, their other faces coplanar: EPA from the line
+  // of their centres stops at 2.2 mm on a wrong face unless checked.
+  const auto slab = std::make_shared<ObjectModel>(test::boxModel(0.10, 0.08, 0.06));
+  EXPECT_NEAR(collider.penetration(slab, test::at(0, 0, 0.03), slab, test::at(0.095, 0, 0.03)),
+              0.005, 1e-4);
+  EXPECT_GT(
+      collider.partsContact(slab, test::at(0, 0, 0.03), slab, test::at(0.095, 0, 0.03)).normal.x(),
+      0.999);
   // Apart: no depth; the same pair with the roles swapped: the same depth, the normal reversed.
   EXPECT_EQ(collider.penetration(box, T_box, bar, test::at(2, 0, 0)), 0.0);
   const HullContact swapped = collider.partsContact(bar, T_bar, box, T_box);
