@@ -977,6 +977,8 @@ std::vector<Separation> SceneEstimator::localSeparations(const std::map<int, int
                                                          const std::vector<Track*>& solved,
                                                          bool has_ground) const {
   const StageTwoConfig& config = config_.stage_two;
+  std::vector<CollisionBody> stage_one;  // where a carried separation is checked again
+  for (const Track* tr : solved) stage_one.push_back({tr->model, tr->T_stage_one});
   std::vector<Separation> separations;  // local indices
   for (Separation s : separations_by_id_) {
     const auto a = index_of_id.find(s.object_a), b = index_of_id.find(s.object_b);
@@ -984,19 +986,13 @@ std::vector<Separation> SceneEstimator::localSeparations(const std::map<int, int
         (s.object_a < 0 && !has_ground))
       continue;
     s.object_a = a->second, s.object_b = b->second;
-    if (config.separation_drop_stale && !stageOneOverlaps(s, solved)) continue;
+    if (config.separation_drop_stale &&
+        !stillInterpenetrating(s, stage_one, support_, config.separation_min_depth_m,
+                               collider_.get()))
+      continue;
     separations.push_back(s);
   }
   return separations;
-}
-
-bool SceneEstimator::stageOneOverlaps(const Separation& s,
-                                      const std::vector<Track*>& solved) const {
-  const Track& b = *solved[static_cast<std::size_t>(s.object_b)];
-  const double min_depth = config_.stage_two.separation_min_depth_m;
-  if (s.object_a < 0) return depthThroughPlane(support_, *b.model, b.T_stage_one) > min_depth;
-  const Track& a = *solved[static_cast<std::size_t>(s.object_a)];
-  return collider_->partsPenetration(a.model, a.T_stage_one, b.model, b.T_stage_one) > min_depth;
 }
 
 namespace {

@@ -61,4 +61,14 @@ std::vector<Separation> findInterpenetrations(const std::vector<CollisionBody>& 
   return out;
 }
 
+bool stillInterpenetrating(const Separation& s, const std::vector<CollisionBody>& bodies,
+                           const SupportPlane& plane, double min_depth_m, HullCollider* collider) {
+  const CollisionBody& b = bodies.at(static_cast<std::size_t>(s.object_b));
+  if (!b.model) return false;
+  if (s.object_a < 0) return depthThroughPlane(plane, *b.model, b.T_world_obj) > min_depth_m;
+  const CollisionBody& a = bodies.at(static_cast<std::size_t>(s.object_a));
+  return a.model &&
+         collider->partsPenetration(a.model, a.T_world_obj, b.model, b.T_world_obj) > min_depth_m;
+}
+
 }  // namespace geofusion

@@ -385,6 +385,37 @@ TEST(StageTwo, SeparationFactorsPartInterpenetratingEstimates) {
   EXPECT_NEAR(collider.penetration(box, poses[0], other, poses[1]), 0.006, 5e-4);
 }
 
+// A separation is carried to later keyframes while its pair still interpenetrates at the poses it
+// is checked at (stage I's, stage_two.separation_drop_stale); once a new measurement has moved
+// the estimates apart, it would only hold them off it.
+TEST(StageTwo, ACarriedSeparationHoldsWhileItsPairStillInterpenetrates) {
+  const Ground ground;
+  SupportPlane plane;
+  plane.valid = true, plane.height = 0.75, plane.centre = Eigen::Vector3d(0, 0, 0.75);
+  plane.size = Eigen::Vector2d(1.2, 0.8);
+  const auto box = std::make_shared<ObjectModel>(boxModel(0.1, 0.1, 0.05));
+  auto other = std::make_shared<ObjectModel>(boxModel(0.1, 0.1, 0.05));
+  other->name = "other_box";
+  HullCollider collider;
+  const std::vector<CollisionBody> found_at = {{box, at(0, 0, 0.775)},
+                                               {other, at(0.094, 0, 0.773)}};
+  const std::vector<Separation> found =
+      findInterpenetrations(found_at, &plane, ground.posed.T_world_obj, 0.0005, &collider);
+  ASSERT_EQ(found.size(), 2u);
+  for (const Separation& s : found) {
+    SCOPED_TRACE(s.object_a);
+    EXPECT_TRUE(stillInterpenetrating(s, found_at, plane, 0.0005, &collider));
+    // Measured again 1 mm apart and on the table: both separations are stale.
+    const std::vector<CollisionBody> parted = {{box, at(0, 0, 0.775)},
+                                               {other, at(0.101, 0, 0.775)}};
+    EXPECT_FALSE(stillInterpenetrating(s, parted, plane, 0.0005, &collider));
+  }
+  // Still 2 mm into its neighbour (and out of the table): the pair's holds, the table's does not.
+  const std::vector<CollisionBody> closer = {{box, at(0, 0, 0.775)}, {other, at(0.098, 0, 0.775)}};
+  for (const Separation& s : found)
+    EXPECT_EQ(stillInterpenetrating(s, closer, plane, 0.0005, &collider), s.object_a == 0);
+}
+
 // An L of two convex parts and a cube by its inner corner: the cube lies 2 mm inside the L's hull
 // (which spans the corner) and clear of both arms. The physical check's bodies are the hulls,
 // so the final solve parts so shallow a hull contact as hulls; a cube deep in the corner is in

@@ -349,7 +349,6 @@ class SceneEstimator {
   std::vector<Separation> localSeparations(const std::map<int, int>& index_of_id,
                                            const std::vector<Track*>& solved,
                                            bool has_ground) const;
-  bool stageOneOverlaps(const Separation& s, const std::vector<Track*>& solved) const;
   void liftOutOfSupport(Track* track) const;
   void keepSeparations(const std::vector<Separation>& separations,
                        const std::vector<Track*>& solved);

@@ -37,4 +37,12 @@ std::vector<Separation> findInterpenetrations(const std::vector<CollisionBody>& 
                                               bool same_class_pairs = false,
                                               double hull_max_depth_m = 0.0);
 
+/// Whether the pair of separation `s` (object indices into `bodies`, -1 the support `plane`)
+/// still interpenetrates deeper than `min_depth_m` at the `bodies`' poses, measured as
+/// findInterpenetrations finds it (convex parts; a hull through the plane). Stage II drops a
+/// separation carried from an earlier keyframe once its pair's stage I poses do not
+/// (stage_two.separation_drop_stale).
+bool stillInterpenetrating(const Separation& s, const std::vector<CollisionBody>& bodies,
+                           const SupportPlane& plane, double min_depth_m, HullCollider* collider);
+
 }  // namespace geofusion
