@@ -14,6 +14,7 @@
 
 #include <random>
 #include <tuple>
+#include <utility>
 
 namespace geofusion {
 namespace {
@@ -324,17 +325,29 @@ TEST(StageTwo, RemovesInterpenetrationAndFloating) {
   EXPECT_NEAR(poses[1].translation().x(), 0.01, 0.002);
 }
 
+// The table of the separation tests (stage II's ground block, `Ground`, is at its height).
+SupportPlane separationTable() {
+  SupportPlane plane;
+  plane.valid = true, plane.height = 0.75, plane.centre = Eigen::Vector3d(0, 0, 0.75);
+  plane.size = Eigen::Vector2d(1.2, 0.8);
+  return plane;
+}
+
+// Two 10 x 10 x 5 cm boxes of two classes (two of one class are left to merging).
+std::pair<std::shared_ptr<ObjectModel>, std::shared_ptr<ObjectModel>> twoBoxes() {
+  auto box = std::make_shared<ObjectModel>(boxModel(0.1, 0.1, 0.05));
+  auto other = std::make_shared<ObjectModel>(boxModel(0.1, 0.1, 0.05));
+  other->name = "other_box";
+  return {box, other};
+}
+
 // Two boxes side by side on the table, their estimates 6 mm into each other (side contacts stay
 // out of stage II), and one 2 mm into the table: FCL finds both, the separation factors part
 // them, and the table's supports keep them on it.
 TEST(StageTwo, SeparationFactorsPartInterpenetratingEstimates) {
   const Ground ground;
-  SupportPlane plane;
-  plane.valid = true, plane.height = 0.75, plane.centre = Eigen::Vector3d(0, 0, 0.75);
-  plane.size = Eigen::Vector2d(1.2, 0.8);
-  const auto box = std::make_shared<ObjectModel>(boxModel(0.1, 0.1, 0.05));
-  auto other = std::make_shared<ObjectModel>(boxModel(0.1, 0.1, 0.05));
-  other->name = "other_box";  // two of one class are left to merging
+  const SupportPlane plane = separationTable();
+  const auto [box, other] = twoBoxes();
   HullCollider collider;
   const std::vector<Eigen::Isometry3d> priors = {at(0, 0, 0.775), at(0.094, 0, 0.773)};
   ASSERT_EQ(findInterpenetrations({{box, priors[0]}, {box, priors[1]}}, &plane,
@@ -390,12 +403,8 @@ TEST(StageTwo, SeparationFactorsPartInterpenetratingEstimates) {
 // the estimates apart, it would only hold them off it.
 TEST(StageTwo, ACarriedSeparationHoldsWhileItsPairStillInterpenetrates) {
   const Ground ground;
-  SupportPlane plane;
-  plane.valid = true, plane.height = 0.75, plane.centre = Eigen::Vector3d(0, 0, 0.75);
-  plane.size = Eigen::Vector2d(1.2, 0.8);
-  const auto box = std::make_shared<ObjectModel>(boxModel(0.1, 0.1, 0.05));
-  auto other = std::make_shared<ObjectModel>(boxModel(0.1, 0.1, 0.05));
-  other->name = "other_box";
+  const SupportPlane plane = separationTable();
+  const auto [box, other] = twoBoxes();
   HullCollider collider;
   const std::vector<CollisionBody> found_at = {{box, at(0, 0, 0.775)},
                                                {other, at(0.094, 0, 0.773)}};
