@@ -1,12 +1,12 @@
 #include "geofusion/model/collision.h"
 
+#include "geofusion/model/bullet_shapes.h"
 #include "geofusion/model/fcl_hull.h"
 #include "geofusion/model/object_model.h"
 
 #include <fcl/narrowphase/collision.h>
 #include <fcl/narrowphase/distance.h>
 
-#include <BulletCollision/CollisionShapes/btConvexHullShape.h>
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpa2.h>
 
 #include <algorithm>
@@ -74,18 +74,8 @@ double fclDistance(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b) {
 
 namespace {
 
-btTransform btPose(const Eigen::Isometry3d& T) {
-  const Eigen::Quaterniond q(T.linear());
-  const Eigen::Vector3d& t = T.translation();
-  return btTransform(btQuaternion(q.x(), q.y(), q.z(), q.w()), btVector3(t.x(), t.y(), t.z()));
-}
-
-std::shared_ptr<btConvexHullShape> btConvex(const TriangleMesh& hull) {
-  auto shape = std::make_shared<btConvexHullShape>();
-  for (const auto& v : hull.vertices) shape->addPoint(btVector3(v.x(), v.y(), v.z()), false);
-  shape->recalcLocalAabb();
-  shape->setMargin(0.0);  // the hull itself, not Bullet's rounded shell around it
-  return shape;
+std::shared_ptr<btConvexShape> btConvex(const TriangleMesh& hull) {
+  return bulletHull(hull, Eigen::Vector3f::Zero(), 0.0);
 }
 
 // How far b must move along the world direction `n` to leave a: their supports' overlap along
@@ -107,7 +97,7 @@ double overlapAlong(const btConvexShape& a, const btTransform& Ta, const btConve
 // from b to a; here it is in the world and from a to b.
 HullContact bulletContact(const btConvexShape& a, const Eigen::Isometry3d& T_world_a,
                           const btConvexShape& b, const Eigen::Isometry3d& T_world_b) {
-  const btTransform Ta = btPose(T_world_a), Tb = btPose(T_world_b);
+  const btTransform Ta = toBullet(T_world_a), Tb = toBullet(T_world_b);
   const btVector3 centres = Tb.getOrigin() - Ta.getOrigin();
   const btVector3 starts[] = {centres.fuzzyZero() ? btVector3(0, 0, 1) : centres,
                               btVector3(0, 0, 1), btVector3(1, 0, 0), btVector3(0, 1, 0)};
@@ -139,13 +129,13 @@ HullContact bulletContact(const btConvexShape& a, const Eigen::Isometry3d& T_wor
 
 struct HullCollider::Impl {
   struct Part {
-    std::shared_ptr<btConvexHullShape> shape;
+    std::shared_ptr<btConvexShape> shape;
     Eigen::Vector3d centre;  ///< of the part's bounding sphere, model frame
     double radius = 0.0;
   };
   struct Hull {
     std::shared_ptr<fcl::CollisionGeometryd> fcl;  ///< for distances
-    std::shared_ptr<btConvexHullShape> bullet;     ///< for penetrations
+    std::shared_ptr<btConvexShape> bullet;         ///< for penetrations
   };
   std::map<std::shared_ptr<const ObjectModel>, Hull> hulls;
   std::map<std::shared_ptr<const ObjectModel>, std::vector<Part>> parts;
@@ -156,7 +146,7 @@ struct HullCollider::Impl {
     const TriangleMesh mesh = collisionHullOf(*m);
     return hulls[m] = Hull{fclConvex(mesh), btConvex(mesh)};
   }
-  // The model's convex parts; a model with one part (or none made) has its hull, the same FCL
+  // The model's convex parts; a model with one part (or none made) has its hull, the same Bullet
   // shape penetration() uses.
   const std::vector<Part>& partsOf(const std::shared_ptr<const ObjectModel>& m) {
     auto it = parts.find(m);

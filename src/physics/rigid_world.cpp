@@ -1,5 +1,7 @@
 #include "geofusion/physics/rigid_world.h"
 
+#include "geofusion/model/bullet_shapes.h"
+
 #include <btBulletDynamicsCommon.h>
 
 #include <algorithm>
@@ -12,13 +14,6 @@ btVector3 bt(const Eigen::Vector3d& v) {
   return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z()));
 }
 
-btTransform toBullet(const Eigen::Isometry3d& T) {
-  const Eigen::Quaterniond q(T.linear());
-  return btTransform(
-      btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w())),
-      bt(T.translation()));
-}
-
 Eigen::Isometry3d fromBullet(const btTransform& t) {
   const btQuaternion q = t.getRotation();
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -29,18 +24,6 @@ Eigen::Isometry3d fromBullet(const btTransform& t) {
 
 /// Bullet's collision margin of every hull, m (the generator's bodies are rounded by it).
 constexpr double kHullMargin = 0.0005;
-
-std::unique_ptr<btConvexHullShape> hullShape(const TriangleMesh& mesh,
-                                             const Eigen::Vector3f& centre) {
-  auto hull = std::make_unique<btConvexHullShape>();
-  for (const Eigen::Vector3f& v : mesh.vertices) {
-    const Eigen::Vector3f p = v - centre;
-    hull->addPoint(btVector3(p.x(), p.y(), p.z()), false);
-  }
-  hull->recalcLocalAabb();
-  hull->setMargin(btScalar(kHullMargin));
-  return hull;
-}
 
 // Bullet rounds a convex hull outwards by its collision margin. The compound bodies' hulls are
 // first moved inwards by the margin, so that the rounded shape is the model's own and objects that
@@ -82,7 +65,8 @@ struct ModelFrameCompound {
     btTransform identity;
     identity.setIdentity();
     for (const TriangleMesh& s : shapes) {
-      hulls.push_back(hullShape(shrunkByMargin(s, kHullMargin), Eigen::Vector3f::Zero()));
+      hulls.push_back(
+          bulletHull(shrunkByMargin(s, kHullMargin), Eigen::Vector3f::Zero(), kHullMargin));
       shape.addChildShape(identity, hulls.back().get());
       masses.push_back(btScalar(density_kg_m3 * std::max(enclosedVolume(s), 1e-9)));
       mass += masses.back();
@@ -182,7 +166,7 @@ std::size_t RigidWorld::add(const std::vector<TriangleMesh>& shapes,
     for (const auto& v : hull.vertices) c += v;
     c /= static_cast<float>(hull.vertices.size());
     b.offset = c.cast<double>();
-    b.hulls.push_back(hullShape(hull, c));
+    b.hulls.push_back(bulletHull(hull, c, kHullMargin));
     mass = btScalar(o.mass_kg);
     b.hulls.back()->calculateLocalInertia(mass, inertia);
     shape = b.hulls.back().get();

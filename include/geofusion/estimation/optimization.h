@@ -203,10 +203,9 @@ struct StageTwoConfig {
   int local_map_keyframes = 60;
   /// Issue 50: nothing interpenetrates. After the solve, estimates whose shapes (convex
   /// parts) interpenetrate deeper than separation_min_depth_m (HullCollider; the support plane:
-  /// the hull)
-  /// get a separation factor (factors/separation_factor.h: part along the contact normal by the
-  /// depth plus separation_margin_m, weight 1 / separation_sigma_m) and stage II is solved again
-  /// with them, up to separation_rounds times (0: off).
+  /// the hull) get a separation factor (factors/separation_factor.h: part along the contact
+  /// normal by the depth plus separation_margin_m, weight 1 / separation_sigma_m) and stage II is
+  /// solved again with them, up to separation_rounds times (0: off).
   int separation_rounds = 2;
   double separation_min_depth_m = 0.0005;
   double separation_margin_m = 0.0003;

@@ -18,8 +18,8 @@ struct ObjectModel;
 TriangleMesh collisionHullOf(const ObjectModel& model);
 
 /// Where two posed hulls interpenetrate: `depth` (0 when apart; the smallest translation that
-/// parts them), the world
-/// `normal` along which b leaves a (from a to b), and the contact `point` in the world.
+/// parts them), the world `normal` along which b leaves a (from a to b), and the contact `point`
+/// in the world.
 struct HullContact {
   double depth = 0.0;
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
