@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <random>
 #include <sstream>
 
 namespace geofusion {
@@ -301,6 +302,75 @@ TEST(HullCollider, PenetrationIsTheSmallestTranslationThatParts) {
   const HullContact swapped = collider.partsContact(bar, T_bar, box, T_box);
   EXPECT_NEAR(swapped.depth, c.depth, 2e-4);
   EXPECT_GT(swapped.normal.dot(-c.normal), 0.99);
+}
+
+// Two boxes' exact penetration depth by the separating axes (their 3 + 3 face normals and the 9
+// edge cross products): the least overlap of their projections, 0 when apart.
+double boxesDepth(const Eigen::Vector3d& half_a, const Eigen::Isometry3d& T_a,
+                  const Eigen::Vector3d& half_b, const Eigen::Isometry3d& T_b) {
+  const Eigen::Matrix3d A = T_a.linear(), B = T_b.linear();
+  std::vector<Eigen::Vector3d> axes;
+  for (int i = 0; i < 3; ++i) axes.push_back(A.col(i)), axes.push_back(B.col(i));
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (A.col(i).cross(B.col(j)).norm() > 1e-6)
+        axes.push_back(A.col(i).cross(B.col(j)).normalized());
+  double depth = std::numeric_limits<double>::infinity();
+  for (const Eigen::Vector3d& n : axes) {
+    double reach = 0.0;
+    for (int i = 0; i < 3; ++i)
+      reach += half_a[i] * std::abs(n.dot(A.col(i))) + half_b[i] * std::abs(n.dot(B.col(i)));
+    depth = std::min(depth, reach - std::abs(n.dot(T_b.translation() - T_a.translation())));
+  }
+  return std::max(0.0, depth);
+}
+
+// Bullet's EPA (single precision) stopped on wrong faces when the boxes' faces are parallel (one
+// orientation, or quarter turns, as hand-made and primitive scenes have): 786 of 18,256 random
+// pairs off by more than 0.2 mm, up to 92 mm either way, and deep concentric pairs reported
+// apart. Random box pairs, three kinds of orientation, against the separating axes' depth.
+TEST(HullCollider, BoxPairsHaveTheSeparatingAxesDepthInAnyOrientation) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  HullCollider collider;
+  const char* kinds[] = {"one orientation", "quarter turns about z", "random orientations"};
+  for (int kind = 0; kind < 3; ++kind) {
+    int pairs = 0, off = 0;
+    double worst = 0.0;
+    for (int k = 0; k < 400; ++k) {
+      Eigen::Vector3d half[2];
+      Eigen::Isometry3d T[2];
+      for (int i = 0; i < 2; ++i) {
+        half[i] = Eigen::Vector3d(0.01 + 0.06 * u(rng), 0.01 + 0.06 * u(rng), 0.01 + 0.06 * u(rng));
+        T[i] = Eigen::Isometry3d::Identity();
+        if (kind == 1) T[i].linear() = test::rot(90.0 * std::floor(4 * u(rng)), {0, 0, 1});
+        if (kind == 2) T[i].linear() = Eigen::Quaterniond::UnitRandom().toRotationMatrix();
+      }
+      T[1].translation() =
+          Eigen::Vector3d(0.12 * (u(rng) - 0.5), 0.12 * (u(rng) - 0.5), 0.12 * (u(rng) - 0.5));
+      if (k % 3 == 0) T[1].translation().y() = T[1].translation().z() = 0.0;  // along an axis
+      if (k % 50 == 1) T[1].translation().setZero();                          // concentric
+      const double truth = boxesDepth(half[0], T[0], half[1], T[1]);
+      if (truth < 1e-4) continue;
+      const auto a = std::make_shared<ObjectModel>(
+          test::boxModel(2 * half[0].x(), 2 * half[0].y(), 2 * half[0].z()));
+      const auto b = std::make_shared<ObjectModel>(
+          test::boxModel(2 * half[1].x(), 2 * half[1].y(), 2 * half[1].z()));
+      const HullContact c = collider.hullContact(a, T[0], b, T[1]);
+      ++pairs;
+      worst = std::max(worst, std::abs(c.depth - truth));
+      if (std::abs(c.depth - truth) > 2e-4) ++off;
+      // The normal parts them: b moved along it by the depth (and a little) leaves a.
+      Eigen::Isometry3d out = T[1];
+      out.translation() += (c.depth + 1e-3) * c.normal;
+      EXPECT_EQ(boxesDepth(half[0], T[0], half[1], out), 0.0) << kinds[kind] << ", pair " << k;
+    }
+    std::printf("%s: %d pairs, %d off by more than 0.2 mm, worst %.3f mm\n", kinds[kind], pairs,
+                off, 1000 * worst);
+    EXPECT_GT(pairs, 150);
+    EXPECT_LE(off, pairs / 100) << kinds[kind];
+    EXPECT_LT(worst, 1e-3) << kinds[kind];
+  }
 }
 
 }  // namespace
