@@ -153,6 +153,7 @@ struct HullCollider::Impl {
     auto it = hulls.find(m);
     if (it != hulls.end()) return it->second;
     const TriangleMesh mesh = collisionHullOf(*m);
+    if (mesh.empty()) return hulls[m] = Hull{};  // no volume: nothing touches it
     return hulls[m] = Hull{fclConvex(mesh), btConvex(mesh)};
   }
   // The model's convex parts; a model with one part (or none made) has its hull, the same Bullet
@@ -171,6 +172,7 @@ struct HullCollider::Impl {
     if (m->collision_parts.size() <= 1) {
       Part p;
       p.shape = hull(m).bullet;
+      if (!p.shape) return out;  // no volume: no part
       sphere(collisionHullOf(*m), &p);
       out.push_back(p);
       return out;
@@ -206,7 +208,9 @@ HullContact HullCollider::hullContact(const std::shared_ptr<const ObjectModel>& 
                                       const std::shared_ptr<const ObjectModel>& b,
                                       const Eigen::Isometry3d& T_world_b) {
   if (!a || !b) return {};
-  return bulletContact(*impl_->hull(a).bullet, T_world_a, *impl_->hull(b).bullet, T_world_b);
+  const Impl::Hull &ha = impl_->hull(a), &hb = impl_->hull(b);
+  if (!ha.bullet || !hb.bullet) return {};
+  return bulletContact(*ha.bullet, T_world_a, *hb.bullet, T_world_b);
 }
 
 double HullCollider::reach(const std::shared_ptr<const ObjectModel>& model) {
@@ -248,8 +252,10 @@ double HullCollider::distance(const std::shared_ptr<const ObjectModel>& a,
                               const std::shared_ptr<const ObjectModel>& b,
                               const Eigen::Isometry3d& T_world_b) {
   if (!a || !b) return 0.0;
-  fcl::CollisionObjectd oa(impl_->hull(a).fcl, fcl::Transform3d(T_world_a.matrix()));
-  fcl::CollisionObjectd ob(impl_->hull(b).fcl, fcl::Transform3d(T_world_b.matrix()));
+  const Impl::Hull &ha = impl_->hull(a), &hb = impl_->hull(b);
+  if (!ha.fcl || !hb.fcl) return std::numeric_limits<double>::infinity();
+  fcl::CollisionObjectd oa(ha.fcl, fcl::Transform3d(T_world_a.matrix()));
+  fcl::CollisionObjectd ob(hb.fcl, fcl::Transform3d(T_world_b.matrix()));
   return fclDistance(&oa, &ob);
 }
 

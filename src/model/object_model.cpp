@@ -383,6 +383,12 @@ bool ModelSet::load(const std::string& yaml_path, const std::string& models_dir,
                                  "' (diffuse, dark, specular, transparent)");
       }
       if (c["features"]) m.features = parseFeatures(c["features"]);
+      // Contacts, merging, stage II and the physics need a solid: a flat or collinear mesh
+      // (a sheet, a box of zero thickness) has no hull.
+      m.collision_hull = collisionHull(m.mesh);
+      if (m.collision_hull.empty())
+        throw std::runtime_error(
+            "the mesh has no volume (flat, collinear or empty): no collision hull");
       out.add(std::move(m), features);
     } catch (const std::exception& e) {
       errors->push_back("model set '" + yaml_path + "', class " + name + ": " + e.what() +

@@ -66,6 +66,7 @@ TEST(ModelSet, BadFilesAreNamedAndTheRestLoads) {
             "v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0 0 0.1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
   dir.write("corrupt.obj", "this is not a mesh\n\x01\x02\x03 garbage\n");
   dir.write("empty.stl", "");
+  dir.write("sheet.obj", "v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv 0.1 0.1 0\nf 1 2 3\nf 2 4 3\n");
   dir.write("points.xyz", "0 0 0\n0.1 0 0\n");
   dir.write("bad_points.xyz", "0 0 zero\n");
   const std::string yaml = dir.write("set.yaml", R"(
@@ -80,6 +81,8 @@ classes:
   - {name: badpoints, id: 7, box: [0.1, 0.1, 0.1], points: bad_points.xyz}
   - {name: nosource, id: 8}
   - {name: override, id: 9, box: [0.1, 0.1, 0.1], features: {planes: [{center: [0, 0, 0.05], normal: [0, 0, 1]}], curves: []}}
+  - {name: sheet, id: 10, mesh: sheet.obj}
+  - {name: thin, id: 11, box: [0.1, 0.1, 0]}
 )");
   ModelSet set;
   std::vector<std::string> errors;
@@ -93,7 +96,9 @@ classes:
   EXPECT_NEAR(set.find("can")->symmetry.axis.norm(), 1.0, 1e-12);
   ASSERT_NE(set.find("override"), nullptr);
   EXPECT_EQ(set.find("override")->features.planes.size(), 1u);  // the override, not 6
-  EXPECT_EQ(errors.size(), 5u);
+  EXPECT_EQ(errors.size(), 7u);
+  EXPECT_TRUE(anyMentions(errors, "class sheet: the mesh has no volume"));
+  EXPECT_TRUE(anyMentions(errors, "class thin: the mesh has no volume"));
   EXPECT_TRUE(anyMentions(errors, "nowhere.obj"));
   EXPECT_TRUE(anyMentions(errors, "corrupt.obj"));
   EXPECT_TRUE(anyMentions(errors, "empty.stl"));
@@ -323,6 +328,22 @@ double boxesDepth(const Eigen::Vector3d& half_a, const Eigen::Isometry3d& T_a,
     depth = std::min(depth, reach - std::abs(n.dot(T_b.translation() - T_a.translation())));
   }
   return std::max(0.0, depth);
+}
+
+// A model built in code from a mesh without volume has no hull: FCL (Debian's, assertions on)
+// aborted the process on it; now it touches nothing.
+TEST(HullCollider, AModelWithoutVolumeTouchesNothing) {
+  const auto box = std::make_shared<ObjectModel>(test::boxModel(0.1, 0.1, 0.1));
+  auto sheet = std::make_shared<ObjectModel>();
+  sheet->name = "sheet";
+  sheet->mesh = makeBox(Eigen::Vector3d(0.1, 0.1, 0.0));
+  HullCollider collider;
+  collider.prepare(sheet);
+  const Eigen::Isometry3d I = Eigen::Isometry3d::Identity();
+  EXPECT_EQ(collider.penetration(box, I, sheet, I), 0.0);
+  EXPECT_EQ(collider.partsPenetration(sheet, I, box, I), 0.0);
+  EXPECT_TRUE(std::isinf(collider.distance(box, I, sheet, I)));
+  EXPECT_NEAR(collider.penetration(box, I, box, test::at(0.09, 0, 0)), 0.01, 2e-4);
 }
 
 // Bullet's EPA (single precision) stopped on wrong faces when the boxes' faces are parallel (one

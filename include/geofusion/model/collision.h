@@ -59,7 +59,8 @@ class HullCollider {
   double reach(const std::shared_ptr<const ObjectModel>& model);
   /// Builds the model's hull and parts shapes now (at start, not at the first contact check).
   void prepare(const std::shared_ptr<const ObjectModel>& model);
-  /// Distance between the two hulls, 0 when they touch or intersect.
+  /// Distance between the two hulls, 0 when they touch or intersect. A model without a hull (a
+  /// mesh without volume, which model sets refuse) touches nothing: no depth, infinite distance.
   double distance(const std::shared_ptr<const ObjectModel>& a, const Eigen::Isometry3d& T_world_a,
                   const std::shared_ptr<const ObjectModel>& b, const Eigen::Isometry3d& T_world_b);
 
