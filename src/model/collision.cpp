@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <map>
 
@@ -89,35 +90,43 @@ double overlapAlong(const btConvexShape& a, const btTransform& Ta, const btConve
 
 // The penetration of two posed convex shapes: the smallest translation that parts them, found by
 // Bullet's GJK and EPA (FCL's libccd path gives MPR's depth along the line of the centres, deeper
-// by up to centimetres: docs/stability.md). Bullet's EPA (single precision) stops on a wrong face
-// from a degenerate start: with faces parallel (boxes of one orientation or quarter turns) and
-// started along an axis, off by centimetres either way, or failing. So each answer is checked
-// against the supports along its normal and, when they disagree, EPA starts again from
-// directions no box face shares, with b turned by a milliradian (the depth is still measured at
-// the true poses). The depth is the supports' overlap along the best normal found, so never less
-// than the true depth. Bullet gives the normal in a's frame and from b to a; here it is in the
-// world and from a to b.
+// by up to centimetres: docs/stability.md). Bullet's EPA (single precision) can stop on a wrong
+// face from a degenerate start: two boxes side by side, faces coplanar, started along their
+// centres' line (2.2 mm for 5), or boxes with parallel faces started along an axis (141 mm for
+// 80, its normal on a diagonal and the supports along it agreeing). So each answer is checked
+// against the supports along its normal; when they disagree, EPA starts again along the axes, and
+// an answer found that way is compared with one from a direction on no box axis, b turned by a
+// milliradian (the depth still measured at the true poses); when no axis start agrees, up to
+// three such starts. The depth is the supports' overlap along the best normal found, so never
+// less than the true depth. Bullet gives the normal in a's frame and from b to a; here it is in
+// the world and from a to b.
 HullContact bulletContact(const btConvexShape& a, const Eigen::Isometry3d& T_world_a,
                           const btConvexShape& b, const Eigen::Isometry3d& T_world_b) {
   const btTransform Ta = toBullet(T_world_a), Tb = toBullet(T_world_b);
   const btVector3 centres = Tb.getOrigin() - Ta.getOrigin();
-  const btVector3 generic[] = {btVector3(0.36, 0.48, 0.80), btVector3(-0.80, 0.36, 0.48),
-                               btVector3(0.48, -0.80, 0.36)};  // unit, on no box's axis
-  const btVector3 starts[] = {centres.length() > 1e-4 ? centres : generic[0], generic[0],
-                              generic[1], generic[2]};
-  const btTransform Tb_turned(Tb.getBasis() * btMatrix3x3(btQuaternion(generic[0], 1e-3)),
+  const btVector3 starts[] = {centres.fuzzyZero() ? btVector3(0, 0, 1) : centres,
+                              btVector3(0, 0, 1),
+                              btVector3(1, 0, 0),
+                              btVector3(0, 1, 0),
+                              btVector3(0.36, 0.48, 0.80),  // unit, on no box's axis
+                              btVector3(-0.80, 0.36, 0.48),
+                              btVector3(0.48, -0.80, 0.36)};
+  constexpr std::size_t kAxisStarts = 4;  // the centres and the three axes: b as it is
+  const btTransform Tb_turned(Tb.getBasis() * btMatrix3x3(btQuaternion(starts[4], 1e-3)),
                               Tb.getOrigin());
   constexpr double kAgree = 2e-4;  // m: EPA's accuracy in single precision and then some
   HullContact best;
   best.depth = std::numeric_limits<double>::infinity();
-  for (std::size_t k = 0; k < 4; ++k) {
+  std::size_t last = std::size(starts);
+  for (std::size_t k = 0; k < last; ++k) {
+    const bool turned = k >= kAxisStarts;
     btGjkEpaSolver2::sResults r;
-    if (!btGjkEpaSolver2::Penetration(&a, Ta, &b, k == 0 ? Tb : Tb_turned, starts[k], r)) {
-      if (k == 0 && r.status == btGjkEpaSolver2::sResults::Separated) return {};
+    if (!btGjkEpaSolver2::Penetration(&a, Ta, &b, turned ? Tb_turned : Tb, starts[k], r)) {
+      if (!turned && r.status == btGjkEpaSolver2::sResults::Separated) return {};
       continue;  // GJK or EPA failed from this start
     }
     if (r.distance >= 0) {
-      if (k == 0) return {};
+      if (!turned) return {};
       continue;  // parted by the turn: no face from this start
     }
     const btVector3 n = -(Ta.getBasis() * r.normal).normalized();
@@ -128,7 +137,10 @@ HullContact bulletContact(const btConvexShape& a, const Eigen::Isometry3d& T_wor
       best.normal = Eigen::Vector3d(n.x(), n.y(), n.z());
       best.point = Eigen::Vector3d(mid.x(), mid.y(), mid.z());
     }
-    if (parting <= -r.distance + kAgree) break;  // EPA's face is the supports' own
+    if (parting > -r.distance + kAgree) continue;  // EPA's face is not the supports'
+    if (k == 0 || turned) break;                   // the centres' answer, or a turned one
+    last = std::min(last, kAxisStarts + 1);        // an axis answer: one turned start to compare
+    k = std::max(k, kAxisStarts - 1);
   }
   if (!(best.depth > 0.0) || !std::isfinite(best.depth)) return {};
   return best;
