@@ -62,11 +62,17 @@ def wait_until(condition, timeout_s=15.0, poll_s=0.1):
     return condition()
 
 
+def test_slowdown():
+    """GEOFUSION_TEST_SLOWDOWN: how many times slower scripts/test_sanitizer.sh's instrumented
+    build runs (1 otherwise)."""
+    return float(os.environ.get('GEOFUSION_TEST_SLOWDOWN', '1'))
+
+
 def throughput_rate(rate):
     """The replay rate for a test whose pass depends on how fast the code runs (the estimator must
     keep up, or fall behind by a bounded amount): rate divided by GEOFUSION_TEST_SLOWDOWN, which
     scripts/test_sanitizer.sh sets for its instrumented build (several times slower); 1 otherwise."""
-    return rate / float(os.environ.get('GEOFUSION_TEST_SLOWDOWN', '1'))
+    return rate / test_slowdown()
 
 
 def play(bag, rate=1.0):

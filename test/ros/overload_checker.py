@@ -3,7 +3,6 @@
 frame (test/ros/config/overload.yaml). The estimator cannot keep up: frames pushed out of the
 queue must be counted as 'queue overflow', and the diagnostics must account for every
 synchronised frame (a keyframe, or dropped with its reason); the maps keep coming."""
-import os
 import shutil
 import tempfile
 import threading
@@ -29,7 +28,7 @@ def overload_replay():
     (2026-12-08, c82716d). Past a slowdown of 5 (s = slowdown / 5): s times the keyframes at a
     rate divided by s squared, so that the transport keeps up and the replay lasts long enough
     for more than 5 keyframes at TSan's 0.5 s each."""
-    s = max(1.0, float(os.environ.get('GEOFUSION_TEST_SLOWDOWN', '1')) / 5.0)
+    s = max(1.0, util.test_slowdown() / 5.0)
     return int(round(60 * s)), 20.0 / (s * s)
 
 
