@@ -490,6 +490,12 @@ class Table {
         "prior_sigma_position_m");
     real("stage_two.prior_sigma_rotation_rad", 0.001, 2, "object prior rotation std, rad",
          [f](GeoFusionConfig& c) { return &f(c)->prior_sigma_rotation_rad; });
+    integer("stage_two.prior_full_weight_measurements", 0, 100000,
+            "an object measured n times holds to its prior with weight sqrt(n / this), in "
+            "[prior_min_weight, 1] (0: every object weight 1)",
+            [f](GeoFusionConfig& c) { return &f(c)->prior_full_weight_measurements; });
+    real("stage_two.prior_min_weight", 0.01, 1, "... the least weight of an object's prior",
+         [f](GeoFusionConfig& c) { return &f(c)->prior_min_weight; });
     real(
         "stage_two.contact_sigma_distance_m", 0.0001, 0.05, "contact distance std (omega_p), m",
         [f](GeoFusionConfig& c) { return &f(c)->contact_sigma_distance_m; },

@@ -445,13 +445,15 @@ class StageTwoProblem {
   StageTwoProblem(const std::vector<Eigen::Isometry3d>& T_world_obj,
                   const std::vector<const ObjectModel*>& models,
                   const std::vector<Eigen::Isometry3d>& priors, const PosedModel* ground,
-                  const StageTwoConfig& config, const std::vector<bool>& held)
+                  const StageTwoConfig& config, const std::vector<bool>& held,
+                  const std::vector<double>& prior_weights)
       : problem_(ceres_compat::optionsKeepingManifolds()),  // manifold_ is constructed first
         models_(models),
         priors_(priors),
         ground_(ground),
         config_(config),
         held_(held),
+        prior_weights_(prior_weights),
         objs_(T_world_obj.size()),
         in_problem_(T_world_obj.size(), 0) {
     for (std::size_t i = 0; i < objs_.size(); ++i) objs_[i].set(T_world_obj[i]);
@@ -540,9 +542,10 @@ class StageTwoProblem {
     }
     Eigen::Vector3d axis;
     const bool free = freeAxis(models_[i], &axis);
+    const double w = prior_weights_.empty() ? 1.0 : prior_weights_[i];
     auto* prior = new ceres::AutoDiffCostFunction<RelativePoseFactor, 6, 7, 7>(
-        new RelativePoseFactor(priors_[i], 1.0 / config_.prior_sigma_position_m,
-                               1.0 / config_.prior_sigma_rotation_rad, free, axis));
+        new RelativePoseFactor(priors_[i], w / config_.prior_sigma_position_m,
+                               w / config_.prior_sigma_rotation_rad, free, axis));
     problem_.AddResidualBlock(prior, nullptr, identity_.data(), objs_[i].data());
   }
 
@@ -553,6 +556,7 @@ class StageTwoProblem {
   const PosedModel* ground_;
   const StageTwoConfig& config_;
   const std::vector<bool>& held_;
+  const std::vector<double>& prior_weights_;
   std::vector<PoseBlock> objs_;
   std::vector<char> in_problem_;
   PoseBlock ground_block_, identity_;
@@ -566,14 +570,20 @@ StageTwoSummary optimizeStageTwo(std::vector<Eigen::Isometry3d>* T_world_obj,
                                  const std::vector<FeatureContact>& contacts,
                                  const PosedModel* ground, const StageTwoConfig& config,
                                  const std::vector<Separation>& separations,
-                                 const std::vector<bool>& held) {
+                                 const std::vector<bool>& held,
+                                 const std::vector<double>& prior_weights) {
   StageTwoSummary summary;
   const std::size_t n = T_world_obj->size();
-  if (models.size() != n || priors.size() != n || (!held.empty() && held.size() != n)) {
+  const bool weights_ok =
+      prior_weights.empty() || (prior_weights.size() == n &&
+                                std::all_of(prior_weights.begin(), prior_weights.end(),
+                                            [](double w) { return std::isfinite(w) && w > 0.0; }));
+  if (models.size() != n || priors.size() != n || (!held.empty() && held.size() != n) ||
+      !weights_ok) {
     summary.status = SolveStatus::kBadInput;
     return summary;
   }
-  StageTwoProblem problem(*T_world_obj, models, priors, ground, config, held);
+  StageTwoProblem problem(*T_world_obj, models, priors, ground, config, held, prior_weights);
   for (const FeatureContact& c : contacts) summary.contacts += problem.addContact(c) ? 1 : 0;
   for (const Separation& s : separations) summary.separations += problem.addSeparation(s) ? 1 : 0;
   if (summary.contacts + summary.separations == 0) {
@@ -585,6 +595,13 @@ StageTwoSummary optimizeStageTwo(std::vector<Eigen::Isometry3d>* T_world_obj,
   }
   problem.solve(T_world_obj, &summary);
   return summary;
+}
+
+double priorWeight(int measurements, const StageTwoConfig& config) {
+  if (config.prior_full_weight_measurements <= 0) return 1.0;
+  const double w =
+      std::sqrt(std::max(0, measurements) / double(config.prior_full_weight_measurements));
+  return std::clamp(w, config.prior_min_weight, 1.0);
 }
 
 }  // namespace geofusion

@@ -1032,6 +1032,7 @@ StageTwoSummary SceneEstimator::solveStageTwo(const std::vector<std::size_t>& lo
                                               const std::vector<FeatureContact>& contacts,
                                               const PosedModel* ground, bool final_solve) {
   std::vector<Eigen::Isometry3d> poses, priors;
+  std::vector<double> prior_weights;
   std::vector<const ObjectModel*> models;
   std::vector<Track*> solved;
   std::map<int, int> index_of_id = {{-1, -1}};
@@ -1040,6 +1041,7 @@ StageTwoSummary SceneEstimator::solveStageTwo(const std::vector<std::size_t>& lo
     index_of_id[tr.id] = static_cast<int>(solved.size());
     poses.push_back(tr.T_refined);
     priors.push_back(tr.T_stage_one);
+    prior_weights.push_back(priorWeight(tr.measurementCount(), config_.stage_two));
     models.push_back(tr.symmetryModel());
     solved.push_back(&tr);
   }
@@ -1060,8 +1062,8 @@ StageTwoSummary SceneEstimator::solveStageTwo(const std::vector<std::size_t>& lo
       held = heldOutside(found, contacts, solved.size());
       for (std::size_t i = 0; i < solved.size(); ++i) poses[i] = solved[i]->T_refined;
     }
-    const StageTwoSummary r =
-        optimizeStageTwo(&poses, models, priors, contacts, ground, config, separations, held);
+    const StageTwoSummary r = optimizeStageTwo(&poses, models, priors, contacts, ground, config,
+                                               separations, held, prior_weights);
     if (round == 0) {
       s = r;
     } else {  // a re-solve: its iterations count, the costs stay the first solve's

@@ -398,6 +398,57 @@ TEST(StageTwo, SeparationFactorsPartInterpenetratingEstimates) {
   EXPECT_NEAR(collider.penetration(box, poses[0], other, poses[1]), 0.006, 5e-4);
 }
 
+// Issue 50: an object's prior weighs by its evidence (stage_two.prior_full_weight_measurements).
+// The pair of the test above, one box measured 100 times, the other twice: parted, the one seen
+// twice yields (weight sqrt(2 / 20): it moves about 10 times farther, as the weights' squares);
+// with one weight for both they share the 6 mm.
+TEST(StageTwo, AnObjectSeenTwiceYieldsToOneSeenOften) {
+  const Ground ground;
+  const SupportPlane plane = separationTable();
+  const auto [box, other] = twoBoxes();
+  HullCollider collider;
+  const std::vector<Eigen::Isometry3d> priors = {at(0, 0, 0.775), at(0.094, 0, 0.775)};
+  const std::vector<Separation> found = findInterpenetrations(
+      {{box, priors[0]}, {other, priors[1]}}, &plane, ground.posed.T_world_obj, 0.0005, &collider);
+  ASSERT_EQ(found.size(), 1u);
+  const std::vector<const ObjectModel*> models = {box.get(), other.get()};
+  const auto contacts = inferRelations({{box.get(), priors[0]}, {other.get(), priors[1]}},
+                                       &ground.posed, kGravity, ContactConfig());
+  StageTwoConfig config;
+  config.prior_full_weight_measurements = 0;  // off: every object weight 1
+  EXPECT_EQ(priorWeight(2, config), 1.0);
+  config.prior_full_weight_measurements = 20;
+  config.prior_min_weight = 0.2;
+  EXPECT_EQ(priorWeight(100, config), 1.0);
+  EXPECT_EQ(priorWeight(20, config), 1.0);
+  EXPECT_NEAR(priorWeight(5, config), 0.5, 1e-12);
+  EXPECT_EQ(priorWeight(0, config), 0.2);
+  const std::vector<double> weights = {priorWeight(100, config), priorWeight(2, config)};
+  std::vector<Eigen::Isometry3d> poses = priors;
+  ASSERT_TRUE(
+      optimizeStageTwo(&poses, models, priors, contacts, &ground.posed, config, found, {}, weights)
+          .solved);
+  EXPECT_LT(collider.penetration(box, poses[0], other, poses[1]), 0.0002);
+  const double moved_often = (poses[0].translation() - priors[0].translation()).norm();
+  const double moved_twice = (poses[1].translation() - priors[1].translation()).norm();
+  std::printf("parted: seen 100 times moved %.2f mm, seen twice %.2f mm\n", 1000 * moved_often,
+              1000 * moved_twice);
+  EXPECT_LT(moved_often, 0.001);
+  EXPECT_GT(moved_twice, 8 * moved_often);
+  // One weight for both: each moves about half.
+  poses = priors;
+  ASSERT_TRUE(
+      optimizeStageTwo(&poses, models, priors, contacts, &ground.posed, StageTwoConfig(), found)
+          .solved);
+  EXPECT_NEAR((poses[0].translation() - priors[0].translation()).norm(), 0.003, 0.001);
+  // A weight that is no weight is refused, nothing moved.
+  poses = priors;
+  const StageTwoSummary bad = optimizeStageTwo(&poses, models, priors, contacts, &ground.posed,
+                                               config, found, {}, {1.0, 0.0});
+  EXPECT_EQ(bad.status, SolveStatus::kBadInput);
+  EXPECT_TRUE(poses[1].isApprox(priors[1], 1e-12));
+}
+
 // A separation is carried to later keyframes while its pair still interpenetrates at the poses it
 // is checked at (stage I's, stage_two.separation_drop_stale); once a new measurement has moved
 // the estimates apart, it would only hold them off it.

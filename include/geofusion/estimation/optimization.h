@@ -181,6 +181,13 @@ StageOneResiduals stageOneResiduals(const std::vector<Eigen::Isometry3d>& T_map_
 struct StageTwoConfig {
   double prior_sigma_position_m = 0.01;  ///< object prior factor (from stage I)
   double prior_sigma_rotation_rad = 0.06;
+  /// Issue 50: an object's prior weighs by its evidence. An object measured n times holds to
+  /// its stage I pose with weight sqrt(n / prior_full_weight_measurements) (its prior's sigmas
+  /// divided by it; a mean of n measurements is that much surer), at most 1 and at least
+  /// prior_min_weight: a candidate seen twice yields to one seen a hundred times instead of
+  /// pushing it as hard (docs/stability.md). 0: every object the same weight (1).
+  int prior_full_weight_measurements = 10;
+  double prior_min_weight = 0.2;
   double contact_sigma_distance_m = 0.001;  ///< omega_p of the contact factors
   double contact_sigma_direction = 0.01;    ///< omega_q (unit-vector residual)
   RobustLoss contact_loss{"huber", 3.0};
@@ -259,13 +266,19 @@ struct StageTwoSummary {
 /// and kept apart by `separations` (same indices), warm-started from `T_world_obj`. The objects
 /// `held` (empty: none; else one flag per object) keep their poses: they are fixed ends of the
 /// factors that reach them, and factors between fixed ends are left out (a re-solve of part of
-/// the scene).
+/// the scene). `prior_weights` (empty: 1 each; else one per object, > 0) scale each prior's
+/// information (priorWeight()).
 StageTwoSummary optimizeStageTwo(std::vector<Eigen::Isometry3d>* T_world_obj,
                                  const std::vector<const ObjectModel*>& models,
                                  const std::vector<Eigen::Isometry3d>& priors,
                                  const std::vector<FeatureContact>& contacts,
                                  const PosedModel* ground, const StageTwoConfig& config,
                                  const std::vector<Separation>& separations = {},
-                                 const std::vector<bool>& held = {});
+                                 const std::vector<bool>& held = {},
+                                 const std::vector<double>& prior_weights = {});
+
+/// The weight of the stage II prior of an object measured `measurements` times
+/// (StageTwoConfig::prior_full_weight_measurements).
+double priorWeight(int measurements, const StageTwoConfig& config);
 
 }  // namespace geofusion
