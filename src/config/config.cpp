@@ -549,6 +549,16 @@ class Table {
          [f](GeoFusionConfig& c) { return &f(c)->seat_max_translation_m; });
     real("stage_two.seat_max_rotation_deg", 0, 180, "... and turned less than this, deg",
          [f](GeoFusionConfig& c) { return &f(c)->seat_max_rotation_deg; });
+    flag("stage_two.physics_contacts",
+         "the final solve keeps a contact only where the stability check agrees (support, "
+         "leaning: a normal force at rest; side: a contact point); needs a support plane",
+         [f](GeoFusionConfig& c) { return &f(c)->physics_contacts; });
+    real("stage_two.physics_min_force_N", 0, 100,
+         "... a support or leaning contact bears at least this normal force at rest, N",
+         [f](GeoFusionConfig& c) { return &f(c)->physics_min_force_N; });
+    real("stage_two.physics_side_max_distance_m", 0, 0.02,
+         "... a side contact's pair has a contact point at most this far apart at rest, m",
+         [f](GeoFusionConfig& c) { return &f(c)->physics_side_max_distance_m; });
   }
   void background() {
     flag("background.enabled", "build the OctoMap of the static background",

@@ -853,6 +853,9 @@ StageReport SceneEstimator::runRelationsAndStageTwo(const Keyframe* kf, StageTim
   std::vector<FeatureContact> seated = local_contacts;
   for (int round = 0; !kf && round < config_.stage_two.seating_rounds; ++round)
     if (!seatDropped(local, reported, support_model_ ? &ground : nullptr, &seated)) break;
+  if (!kf && config_.stage_two.physics_contacts && support_model_ && support_.valid)
+    setContacts(physicsAgreedContacts(local, reported, local_contacts, &physics_dropped_contacts_),
+                local, reported);
   // Candidates follow their stage I / initial pose.
   for (Track& tr : tracks_)
     if (!tr.confirmed) tr.T_refined = tr.T_stage_one;
@@ -943,6 +946,40 @@ bool SceneEstimator::seatDropped(const std::vector<std::size_t>& local,
   for (std::size_t i = 0; i < solved.size(); ++i) solved[i]->T_refined = before[i];
   separations_by_id_ = separations_before;
   return false;
+}
+
+std::vector<FeatureContact> SceneEstimator::physicsAgreedContacts(
+    const std::vector<std::size_t>& local, const std::vector<std::size_t>& reported,
+    const std::vector<FeatureContact>& contacts, int* dropped) const {
+  std::vector<physics::StabilityBody> bodies;
+  for (std::size_t i : local) {
+    const Track& tr = tracks_[reported[i]];
+    bodies.push_back({tr.id, tr.model, tr.T_refined});
+  }
+  const physics::StabilityPlane plane{support_.normal, support_.height};
+  const physics::StabilityResult check =
+      physics::checkStability(bodies, &plane, config_.gravity, config_.physics);
+  auto judged = [&check](int k) {
+    if (k < 0) return true;  // the plane
+    const physics::BodyMotion& m = check.bodies[static_cast<std::size_t>(k)];
+    return m.simulated && !m.interpenetrating && m.stable;
+  };
+  auto id_of = [&bodies](int k) {
+    return k < 0 ? physics::kPlaneId : bodies[static_cast<std::size_t>(k)].id;
+  };
+  const StageTwoConfig& config = config_.stage_two;
+  std::vector<FeatureContact> kept;
+  for (const FeatureContact& c : contacts) {
+    const physics::RestContact* rest = check.restContact(id_of(c.object_a), id_of(c.object_b));
+    const bool agrees = rest && (c.kind == ContactKind::kSide
+                                     ? rest->min_distance_m <= config.physics_side_max_distance_m
+                                     : rest->normal_force_N >= config.physics_min_force_N);
+    if (agrees || !judged(c.object_a) || !judged(c.object_b))
+      kept.push_back(c);
+    else if (dropped)
+      ++*dropped;
+  }
+  return kept;
 }
 
 std::vector<FeatureContact> SceneEstimator::restingContacts(std::vector<PosedModel>* rested,

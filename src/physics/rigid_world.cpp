@@ -5,6 +5,8 @@
 #include <btBulletDynamicsCommon.h>
 
 #include <algorithm>
+#include <limits>
+#include <map>
 
 namespace geofusion {
 namespace physics {
@@ -236,6 +238,35 @@ MassProperties compoundMassProperties(const std::vector<TriangleMesh>& shapes,
 
 std::size_t RigidWorld::size() const {
   return impl_->bodies.size();
+}
+
+std::vector<WorldContact> RigidWorld::contacts() const {
+  auto index_of = [this](const btCollisionObject* o) {
+    for (std::size_t i = 0; i < impl_->bodies.size(); ++i)
+      if (impl_->bodies[i].rigid.get() == o) return static_cast<int>(i);
+    return -1;  // a static box
+  };
+  // A compound body has a manifold per pair of its parts: one contact per pair of bodies.
+  std::map<std::pair<int, int>, WorldContact> by_pair;
+  btDispatcher& dispatcher = impl_->dispatcher;
+  for (int m = 0; m < dispatcher.getNumManifolds(); ++m) {
+    const btPersistentManifold* manifold = dispatcher.getManifoldByIndexInternal(m);
+    int a = index_of(manifold->getBody0()), b = index_of(manifold->getBody1());
+    if (manifold->getNumContacts() == 0 || a == b) continue;
+    if (b < a) std::swap(a, b);
+    auto [it, added] = by_pair.try_emplace({a, b});
+    WorldContact& c = it->second;
+    if (added) c.a = a, c.b = b, c.min_distance_m = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < manifold->getNumContacts(); ++k) {
+      const btManifoldPoint& p = manifold->getContactPoint(k);
+      c.normal_impulse_Ns += p.getAppliedImpulse();
+      c.min_distance_m = std::min(c.min_distance_m, double(p.getDistance()));
+      ++c.points;
+    }
+  }
+  std::vector<WorldContact> out;
+  for (const auto& [pair, c] : by_pair) out.push_back(c);
+  return out;
 }
 
 }  // namespace physics

@@ -232,6 +232,12 @@ std::vector<std::string> validate(const StabilityConfig& c) {
   return errors;
 }
 
+const RestContact* StabilityResult::restContact(int id_a, int id_b) const {
+  for (const RestContact& c : rest_contacts)
+    if ((c.id_a == id_a && c.id_b == id_b) || (c.id_a == id_b && c.id_b == id_a)) return &c;
+  return nullptr;
+}
+
 const BodyMotion* StabilityResult::find(int id) const {
   for (const BodyMotion& m : bodies)
     if (m.id == id) return &m;
@@ -296,6 +302,12 @@ StabilityResult checkStability(const std::vector<StabilityBody>& bodies,
     m.rotation_deg = rotationDeg(bodies[prepared[k].index].T_world_obj, m.T_world_end);
   }
   summarise(prepared, pairs, displacement, c, &result);
+  auto id_of = [&](int k) {
+    return k < 0 ? kPlaneId : result.bodies[prepared[static_cast<std::size_t>(k)].index].id;
+  };
+  for (const WorldContact& w : world.contacts())
+    result.rest_contacts.push_back(
+        {id_of(w.a), id_of(w.b), w.normal_impulse_Ns / c.time_step_s, w.min_distance_m});
   return result;
 }
 

@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdio>
 #include <memory>
 
 namespace geofusion {
@@ -42,6 +44,30 @@ TEST(Stability, ABoxOnTheTableAndAStackStayPut) {
     EXPECT_LT(m.rotation_deg, 0.5) << m.id;
   }
   EXPECT_DOUBLE_EQ(result.stableShare(), 1.0);
+}
+
+// Where the bodies came to rest (RestContact): a stack bears on the table with both boxes'
+// weight and on the lower box with the upper's; a box 5 mm beside the stack touches nothing.
+TEST(Stability, RestContactsBearTheWeightAboveThem) {
+  const auto b = box(0.10, 0.08, 0.06);
+  StabilityConfig config;
+  const auto result = check(
+      {{2, b, at(0.3, 0, 0.03)}, {3, b, at(0.3, 0, 0.09)}, {4, b, at(0.405, 0, 0.03)}}, config);
+  ASSERT_EQ(result.stable, 3);
+  const double weight_N = config.density_kg_m3 * 0.10 * 0.08 * 0.06 * config.gravity_m_s2;
+  const auto* table = result.restContact(physics::kPlaneId, 2);
+  const auto* stacked = result.restContact(3, 2);  // either order
+  ASSERT_TRUE(table && stacked);
+  std::printf("normal forces: table %.3f N, stacked %.3f N (one box %.3f N)\n",
+              table->normal_force_N, stacked->normal_force_N, weight_N);
+  EXPECT_NEAR(table->normal_force_N, 2 * weight_N, 0.1 * weight_N);
+  EXPECT_NEAR(stacked->normal_force_N, weight_N, 0.1 * weight_N);
+  EXPECT_LT(std::abs(stacked->min_distance_m), 0.001);
+  const auto* beside = result.restContact(2, 4);
+  EXPECT_TRUE(!beside || beside->min_distance_m > 0.004);
+  EXPECT_TRUE(!beside || beside->normal_force_N < 1e-6);
+  EXPECT_EQ(result.restContact(3, 4), nullptr);
+  EXPECT_NE(result.restContact(physics::kPlaneId, 4), nullptr);
 }
 
 TEST(Stability, AFloatingBoxFallsItsGapAndATiltedSlabTopples) {

@@ -336,6 +336,17 @@ class SceneEstimator {
   /// failed (the poses and separations then as before).
   bool seatDropped(const std::vector<std::size_t>& local, const std::vector<std::size_t>& reported,
                    const PosedModel* ground, std::vector<FeatureContact>* contacts);
+  /// The paper's physical relationship check on the relations (StageTwoConfig::
+  /// physics_contacts): the `local` tracks at their refined poses in the stability check; of
+  /// the `contacts` (local indices) between objects it can judge (simulated, not starting
+  /// inside another, standing), a support or leaning contact is kept where the pair bears on
+  /// each other at rest (a normal force of at least physics_min_force_N), a side contact where
+  /// they touch (a contact point within physics_side_max_distance_m); the others are kept as
+  /// they are. `dropped` (may be null) counts the contacts left out.
+  std::vector<FeatureContact> physicsAgreedContacts(const std::vector<std::size_t>& local,
+                                                    const std::vector<std::size_t>& reported,
+                                                    const std::vector<FeatureContact>& contacts,
+                                                    int* dropped) const;
   /// The contacts (local indices) of the `dropped` objects at their `rested` poses; a dropped
   /// object without one is taken back (not dropped, its rested pose its refined one) and the
   /// contacts found again.
@@ -380,6 +391,7 @@ class SceneEstimator {
   Eigen::Isometry3d T_map_support_ = Eigen::Isometry3d::Identity();
   std::vector<FeatureContact> contacts_;        ///< reported-track indices; -1 = support
   std::vector<FeatureContact> contacts_by_id_;  ///< contacts_ with track ids (-1 = support)
+  int physics_dropped_contacts_ = 0;  ///< contacts the final solves' physics disagreed with
   /// Pairs in contact at the last keyframe, as track ids (-1 = the support), for hysteresis.
   std::vector<std::pair<int, int>> held_contacts_;
   std::vector<ObjectEstimate> frame_objects_;  ///< FbF: this keyframe's detections

@@ -35,6 +35,16 @@ struct MassProperties {
 MassProperties compoundMassProperties(const std::vector<TriangleMesh>& shapes,
                                       double density_kg_m3);
 
+/// Two bodies touching after the latest step (Bullet's contact manifold of the pair): body
+/// indices (-1: a static box), the normal impulse the solver applied at its points in that step
+/// and the least distance between the shapes there (negative: overlapping).
+struct WorldContact {
+  int a = -1, b = -1;
+  double normal_impulse_Ns = 0.0;
+  double min_distance_m = 0.0;
+  int points = 0;
+};
+
 class RigidWorld {
  public:
   explicit RigidWorld(const Eigen::Vector3d& gravity);
@@ -58,6 +68,9 @@ class RigidWorld {
   Eigen::Isometry3d pose(std::size_t index) const;
   Eigen::Vector3d centreOfMass(std::size_t index) const;
   std::size_t size() const;
+  /// The pairs with contact points after the latest step (points up to Bullet's contact
+  /// breaking threshold apart, about 2 % of a body's size), a < b (a static box first, as -1).
+  std::vector<WorldContact> contacts() const;
 
  private:
   struct Impl;

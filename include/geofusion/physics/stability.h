@@ -86,6 +86,16 @@ struct BodyMotion {
 
 constexpr int kPlaneId = -2;
 
+/// Two bodies (or a body and the plane, kPlaneId) touching where the check left them: the
+/// normal force between them in its last step (the solver's normal impulse over the step; 0 when
+/// they touch without bearing on each other) and the least distance between their shapes there
+/// (Bullet's contact points, up to its contact breaking threshold apart; negative: overlapping).
+struct RestContact {
+  int id_a = -1, id_b = -1;
+  double normal_force_N = 0.0;
+  double min_distance_m = 0.0;
+};
+
 /// The whole check, in the order of the bodies given.
 struct StabilityResult {
   std::vector<BodyMotion> bodies;
@@ -102,7 +112,11 @@ struct StabilityResult {
   /// -1 when there is no pair.
   std::pair<int, int> least_stable_pair{-1, -1};
   double least_stable_pair_m = 0.0;
-  std::vector<std::string> warnings;  ///< bad input, named (the rest still checked)
+  std::vector<std::string> warnings;       ///< bad input, named (the rest still checked)
+  std::vector<RestContact> rest_contacts;  ///< where the bodies came to rest, pairs with points
+
+  /// The pair's rest contact (either order; kPlaneId for the plane), null when they do not touch.
+  const RestContact* restContact(int id_a, int id_b) const;
 
   double stableShare() const { return checked > 0 ? double(stable) / checked : 0.0; }
   const BodyMotion* find(int id) const;
