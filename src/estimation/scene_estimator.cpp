@@ -854,8 +854,7 @@ StageReport SceneEstimator::runRelationsAndStageTwo(const Keyframe* kf, StageTim
   for (int round = 0; !kf && round < config_.stage_two.seating_rounds; ++round)
     if (!seatDropped(local, reported, support_model_ ? &ground : nullptr, &seated)) break;
   if (!kf && config_.stage_two.physics_contacts && support_model_ && support_.valid)
-    setContacts(physicsAgreedContacts(local, reported, local_contacts, &physics_dropped_contacts_),
-                local, reported);
+    setContacts(physicsAgreedContacts(local, reported, local_contacts), local, reported);
   // Candidates follow their stage I / initial pose.
   for (Track& tr : tracks_)
     if (!tr.confirmed) tr.T_refined = tr.T_stage_one;
@@ -950,7 +949,7 @@ bool SceneEstimator::seatDropped(const std::vector<std::size_t>& local,
 
 std::vector<FeatureContact> SceneEstimator::physicsAgreedContacts(
     const std::vector<std::size_t>& local, const std::vector<std::size_t>& reported,
-    const std::vector<FeatureContact>& contacts, int* dropped) const {
+    const std::vector<FeatureContact>& contacts) const {
   std::vector<physics::StabilityBody> bodies;
   for (std::size_t i : local) {
     const Track& tr = tracks_[reported[i]];
@@ -974,10 +973,7 @@ std::vector<FeatureContact> SceneEstimator::physicsAgreedContacts(
     const bool agrees = rest && (c.kind == ContactKind::kSide
                                      ? rest->min_distance_m <= config.physics_side_max_distance_m
                                      : rest->normal_force_N >= config.physics_min_force_N);
-    if (agrees || !judged(c.object_a) || !judged(c.object_b))
-      kept.push_back(c);
-    else if (dropped)
-      ++*dropped;
+    if (agrees || !judged(c.object_a) || !judged(c.object_b)) kept.push_back(c);
   }
   return kept;
 }

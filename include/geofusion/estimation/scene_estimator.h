@@ -342,11 +342,10 @@ class SceneEstimator {
   /// inside another, standing), a support or leaning contact is kept where the pair bears on
   /// each other at rest (a normal force of at least physics_min_force_N), a side contact where
   /// they touch (a contact point within physics_side_max_distance_m); the others are kept as
-  /// they are. `dropped` (may be null) counts the contacts left out.
-  std::vector<FeatureContact> physicsAgreedContacts(const std::vector<std::size_t>& local,
-                                                    const std::vector<std::size_t>& reported,
-                                                    const std::vector<FeatureContact>& contacts,
-                                                    int* dropped) const;
+  /// they are.
+  std::vector<FeatureContact> physicsAgreedContacts(
+      const std::vector<std::size_t>& local, const std::vector<std::size_t>& reported,
+      const std::vector<FeatureContact>& contacts) const;
   /// The contacts (local indices) of the `dropped` objects at their `rested` poses; a dropped
   /// object without one is taken back (not dropped, its rested pose its refined one) and the
   /// contacts found again.
@@ -391,7 +390,6 @@ class SceneEstimator {
   Eigen::Isometry3d T_map_support_ = Eigen::Isometry3d::Identity();
   std::vector<FeatureContact> contacts_;        ///< reported-track indices; -1 = support
   std::vector<FeatureContact> contacts_by_id_;  ///< contacts_ with track ids (-1 = support)
-  int physics_dropped_contacts_ = 0;  ///< contacts the final solves' physics disagreed with
   /// Pairs in contact at the last keyframe, as track ids (-1 = the support), for hysteresis.
   std::vector<std::pair<int, int>> held_contacts_;
   std::vector<ObjectEstimate> frame_objects_;  ///< FbF: this keyframe's detections
