@@ -553,9 +553,9 @@ class Table {
          "the final solve keeps a contact only where the stability check agrees (support, "
          "leaning: a normal force at rest; side: a contact point); needs a support plane",
          [f](GeoFusionConfig& c) { return &f(c)->physics_contacts; });
-    real("stage_two.physics_min_force_N", 0, 100,
+    real("stage_two.physics_min_force", 0, 100,
          "... a support or leaning contact bears at least this normal force at rest, N",
-         [f](GeoFusionConfig& c) { return &f(c)->physics_min_force_N; });
+         [f](GeoFusionConfig& c) { return &f(c)->physics_min_force; });
     real("stage_two.physics_side_max_distance_m", 0, 0.02,
          "... a side contact's pair has a contact point at most this far apart at rest, m",
          [f](GeoFusionConfig& c) { return &f(c)->physics_side_max_distance_m; });

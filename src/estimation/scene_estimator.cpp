@@ -972,7 +972,7 @@ std::vector<FeatureContact> SceneEstimator::physicsAgreedContacts(
     const physics::RestContact* rest = check.restContact(id_of(c.object_a), id_of(c.object_b));
     const bool agrees = rest && (c.kind == ContactKind::kSide
                                      ? rest->min_distance_m <= config.physics_side_max_distance_m
-                                     : rest->normal_force_N >= config.physics_min_force_N);
+                                     : rest->normal_force_N >= config.physics_min_force);
     if (agrees || !judged(c.object_a) || !judged(c.object_b)) kept.push_back(c);
   }
   return kept;

@@ -410,6 +410,74 @@ TEST(SceneEstimator, TheFinalSolveSeatsAnObjectThePhysicsDrops) {
   }
 }
 
+// Issue 50, stage_two.physics_contacts: the final solve keeps a contact only where the physics
+// agrees. The poses are those of the run without it and the contacts a subset of its contacts;
+// every support or leaning contact kept between objects standing in the check bears on its pair
+// at rest; asking for more force than any object weighs leaves only the contacts the check
+// cannot judge.
+TEST(SceneEstimator, ThePhysicsKeepsTheContactsThatBear) {
+  const Sequence& s = demoSequence();
+  struct Map {
+    KeyframeResult final;
+    SupportPlane plane;
+  };
+  EstimatorConfig config;
+  auto run_with = [&](bool physics, double min_force_N) {
+    EstimatorConfig c = config;
+    c.stage_two.physics_contacts = physics;
+    c.stage_two.physics_min_force = min_force_N;
+    SceneEstimator estimator(s.models, c);
+    for (std::size_t k = 0; k < s.frames.size(); ++k) estimator.addKeyframe(keyframeOf(s, k));
+    Map m;
+    m.final = estimator.finish();
+    m.plane = estimator.supportPlane();
+    return m;
+  };
+  const Map off = run_with(false, 0.01), on = run_with(true, 0.01), strict = run_with(true, 100);
+  ASSERT_TRUE(off.plane.valid);
+  ASSERT_EQ(on.final.objects.size(), off.final.objects.size());
+  for (std::size_t i = 0; i < off.final.objects.size(); ++i)
+    EXPECT_TRUE(on.final.objects[i].T_map_obj.isApprox(off.final.objects[i].T_map_obj, 1e-9));
+  auto id_of = [](const Map& m, int k) { return k < 0 ? -1 : m.final.objects[k].id; };
+  auto in_off = [&](const Map& m, const FeatureContact& c) {
+    for (const FeatureContact& d : off.final.contacts)
+      if (id_of(off, d.object_a) == id_of(m, c.object_a) &&
+          id_of(off, d.object_b) == id_of(m, c.object_b) && d.kind == c.kind)
+        return true;
+    return false;
+  };
+  const physics::StabilityResult check =
+      checkMapStability(on.final.objects, &on.plane, config.gravity, config.physics);
+  auto standing = [&](int id) {
+    const physics::BodyMotion* b = id < 0 ? nullptr : check.find(id);
+    return id < 0 || (b && b->stable);
+  };
+  int judged = 0;
+  for (const FeatureContact& c : on.final.contacts) {
+    EXPECT_TRUE(in_off(on, c));
+    const int a = id_of(on, c.object_a), b = id_of(on, c.object_b);
+    if (c.kind == ContactKind::kSide || !standing(a) || !standing(b)) continue;
+    ++judged;
+    const physics::RestContact* rest =
+        check.restContact(a < 0 ? physics::kPlaneId : a, b < 0 ? physics::kPlaneId : b);
+    ASSERT_NE(rest, nullptr) << a << " / " << b;
+    EXPECT_GE(rest->normal_force_N, 0.01) << a << " / " << b;
+  }
+  int strict_judged = 0;
+  for (const FeatureContact& c : strict.final.contacts) {
+    EXPECT_TRUE(in_off(strict, c));
+    const int a = id_of(strict, c.object_a), b = id_of(strict, c.object_b);
+    strict_judged += c.kind != ContactKind::kSide && standing(a) && standing(b) ? 1 : 0;
+  }
+  std::printf(
+      "contacts: %zu without the physics, %zu with it (%d support or leaning between "
+      "standing objects), %zu asking 100 N\n",
+      off.final.contacts.size(), on.final.contacts.size(), judged, strict.final.contacts.size());
+  EXPECT_GT(judged, 0);  // the premise: the check judges some
+  EXPECT_EQ(strict_judged, 0);
+  EXPECT_LT(strict.final.contacts.size(), on.final.contacts.size());
+}
+
 // A restart in the middle of a run: the map of the first half, resumed, goes on with the second
 // half as if never interrupted: the same objects under the same ids, none doubled, and the
 // objects seen only before the restart kept.

@@ -243,11 +243,11 @@ struct StageTwoConfig {
   /// Issue 50: the map's contacts kept where the physics agrees. After seating, the final solve
   /// checks the map once more; a contact between two objects the check can judge (simulated,
   /// not starting inside another, standing) is kept when the pair bears on each other at rest
-  /// (support, leaning: Bullet's normal force at least physics_min_force_N) or touches (side: a
+  /// (support, leaning: Bullet's normal force at least physics_min_force) or touches (side: a
   /// contact point within physics_side_max_distance_m); the others stay as found. Needs a
   /// support plane.
   bool physics_contacts = false;
-  double physics_min_force_N = 0.01;
+  double physics_min_force = 0.01;  ///< N
   double physics_side_max_distance_m = 0.002;
 };
 

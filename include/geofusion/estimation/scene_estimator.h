@@ -340,7 +340,7 @@ class SceneEstimator {
   /// physics_contacts): the `local` tracks at their refined poses in the stability check; of
   /// the `contacts` (local indices) between objects it can judge (simulated, not starting
   /// inside another, standing), a support or leaning contact is kept where the pair bears on
-  /// each other at rest (a normal force of at least physics_min_force_N), a side contact where
+  /// each other at rest (a normal force of at least physics_min_force), a side contact where
   /// they touch (a contact point within physics_side_max_distance_m); the others are kept as
   /// they are.
   std::vector<FeatureContact> physicsAgreedContacts(
