@@ -341,14 +341,20 @@ std::pair<std::shared_ptr<ObjectModel>, std::shared_ptr<ObjectModel>> twoBoxes()
   return {box, other};
 }
 
+// The table and two boxes of two classes, with the collider that measures them.
+class StageTwoPair : public ::testing::Test {
+ protected:
+  StageTwoPair() { std::tie(box, other) = twoBoxes(); }
+  const Ground ground;
+  const SupportPlane plane = separationTable();
+  std::shared_ptr<ObjectModel> box, other;
+  HullCollider collider;
+};
+
 // Two boxes side by side on the table, their estimates 6 mm into each other (side contacts stay
 // out of stage II), and one 2 mm into the table: FCL finds both, the separation factors part
 // them, and the table's supports keep them on it.
-TEST(StageTwo, SeparationFactorsPartInterpenetratingEstimates) {
-  const Ground ground;
-  const SupportPlane plane = separationTable();
-  const auto [box, other] = twoBoxes();
-  HullCollider collider;
+TEST_F(StageTwoPair, SeparationFactorsPartInterpenetratingEstimates) {
   const std::vector<Eigen::Isometry3d> priors = {at(0, 0, 0.775), at(0.094, 0, 0.773)};
   ASSERT_EQ(findInterpenetrations({{box, priors[0]}, {box, priors[1]}}, &plane,
                                   ground.posed.T_world_obj, 0.0005, &collider)
@@ -402,11 +408,7 @@ TEST(StageTwo, SeparationFactorsPartInterpenetratingEstimates) {
 // The pair of the test above, one box measured 100 times, the other twice: parted, the one seen
 // twice yields (weight sqrt(2 / 20): it moves about 10 times farther, as the weights' squares);
 // with one weight for both they share the 6 mm.
-TEST(StageTwo, AnObjectSeenTwiceYieldsToOneSeenOften) {
-  const Ground ground;
-  const SupportPlane plane = separationTable();
-  const auto [box, other] = twoBoxes();
-  HullCollider collider;
+TEST_F(StageTwoPair, AnObjectSeenTwiceYieldsToOneSeenOften) {
   const std::vector<Eigen::Isometry3d> priors = {at(0, 0, 0.775), at(0.094, 0, 0.775)};
   const std::vector<Separation> found = findInterpenetrations(
       {{box, priors[0]}, {other, priors[1]}}, &plane, ground.posed.T_world_obj, 0.0005, &collider);
@@ -452,11 +454,7 @@ TEST(StageTwo, AnObjectSeenTwiceYieldsToOneSeenOften) {
 // A separation is carried to later keyframes while its pair still interpenetrates at the poses it
 // is checked at (stage I's, stage_two.separation_drop_stale); once a new measurement has moved
 // the estimates apart, it would only hold them off it.
-TEST(StageTwo, ACarriedSeparationHoldsWhileItsPairStillInterpenetrates) {
-  const Ground ground;
-  const SupportPlane plane = separationTable();
-  const auto [box, other] = twoBoxes();
-  HullCollider collider;
+TEST_F(StageTwoPair, ACarriedSeparationHoldsWhileItsPairStillInterpenetrates) {
   const std::vector<CollisionBody> found_at = {{box, at(0, 0, 0.775)},
                                                {other, at(0.094, 0, 0.773)}};
   const std::vector<Separation> found =
