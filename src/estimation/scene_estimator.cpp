@@ -901,15 +901,8 @@ bool SceneEstimator::seatDropped(const std::vector<std::size_t>& local,
   if (!ground || !support_.valid) return false;  // no plane: nothing to seat anything on
   const StageTwoConfig& config = config_.stage_two;
   std::vector<Track*> solved;
-  std::vector<physics::StabilityBody> bodies;
-  for (std::size_t i : local) {
-    Track& tr = tracks_[reported[i]];
-    bodies.push_back({tr.id, tr.model, tr.T_refined});
-    solved.push_back(&tr);
-  }
-  const physics::StabilityPlane plane{support_.normal, support_.height};
-  const physics::StabilityResult check =
-      physics::checkStability(bodies, &plane, config_.gravity, config_.physics);
+  for (std::size_t i : local) solved.push_back(&tracks_[reported[i]]);
+  const physics::StabilityResult check = checkLocalStability(local, reported);
   // Each object where the simulation left it, if it dropped it within the bounds.
   std::vector<PosedModel> rested;
   std::vector<bool> dropped(solved.size(), false);
@@ -947,24 +940,28 @@ bool SceneEstimator::seatDropped(const std::vector<std::size_t>& local,
   return false;
 }
 
-std::vector<FeatureContact> SceneEstimator::physicsAgreedContacts(
-    const std::vector<std::size_t>& local, const std::vector<std::size_t>& reported,
-    const std::vector<FeatureContact>& contacts) const {
+physics::StabilityResult SceneEstimator::checkLocalStability(
+    const std::vector<std::size_t>& local, const std::vector<std::size_t>& reported) const {
   std::vector<physics::StabilityBody> bodies;
   for (std::size_t i : local) {
     const Track& tr = tracks_[reported[i]];
     bodies.push_back({tr.id, tr.model, tr.T_refined});
   }
   const physics::StabilityPlane plane{support_.normal, support_.height};
-  const physics::StabilityResult check =
-      physics::checkStability(bodies, &plane, config_.gravity, config_.physics);
+  return physics::checkStability(bodies, &plane, config_.gravity, config_.physics);
+}
+
+std::vector<FeatureContact> SceneEstimator::physicsAgreedContacts(
+    const std::vector<std::size_t>& local, const std::vector<std::size_t>& reported,
+    const std::vector<FeatureContact>& contacts) const {
+  const physics::StabilityResult check = checkLocalStability(local, reported);
   auto judged = [&check](int k) {
     if (k < 0) return true;  // the plane
     const physics::BodyMotion& m = check.bodies[static_cast<std::size_t>(k)];
     return m.simulated && !m.interpenetrating && m.stable;
   };
-  auto id_of = [&bodies](int k) {
-    return k < 0 ? physics::kPlaneId : bodies[static_cast<std::size_t>(k)].id;
+  auto id_of = [&check](int k) {
+    return k < 0 ? physics::kPlaneId : check.bodies[static_cast<std::size_t>(k)].id;
   };
   const StageTwoConfig& config = config_.stage_two;
   std::vector<FeatureContact> kept;

@@ -336,6 +336,10 @@ class SceneEstimator {
   /// failed (the poses and separations then as before).
   bool seatDropped(const std::vector<std::size_t>& local, const std::vector<std::size_t>& reported,
                    const PosedModel* ground, std::vector<FeatureContact>* contacts);
+  /// The `local` tracks at their refined poses in the stability check on the support plane (the
+  /// bodies in that order, by track id).
+  physics::StabilityResult checkLocalStability(const std::vector<std::size_t>& local,
+                                               const std::vector<std::size_t>& reported) const;
   /// The paper's physical relationship check on the relations (StageTwoConfig::
   /// physics_contacts): the `local` tracks at their refined poses in the stability check; of
   /// the `contacts` (local indices) between objects it can judge (simulated, not starting
